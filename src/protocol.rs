@@ -1,0 +1,1 @@
+//! Bot protocol v1.

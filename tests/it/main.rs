@@ -1,0 +1,7 @@
+//! The one integration-test binary (one link step for CI): real files, real processes.
+
+mod cli;
+mod mazefiles;
+mod referee;
+mod runner;
+mod support;
