@@ -1,3 +1,20 @@
-fn main() -> anyhow::Result<()> {
-    mazearena::cli::run()
+//! The `mazearena` binary: a thin wrapper over [`mazearena::cli`].
+
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "mazearena=warn".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    match mazearena::cli::run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
 }

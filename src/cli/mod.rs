@@ -1,9 +1,62 @@
-//! The `mazearena` command line.
+//! The `mazearena` command line: one file per subcommand, each a thin layer over the
+//! engine and the runner.
 
-/// Runs the command line.
+mod maze;
+mod run;
+
+use std::path::Path;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+
+use crate::engine::{Maze, mazefile};
+
+/// mazearena: referee, bot runner and tools for the micromouse maze task.
+#[derive(Debug, Parser)]
+#[command(name = "mazearena", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Referee one match: run a bot on a maze, both runs, and print the score.
+    Run(run::RunArgs),
+    /// Maze tools: validate, solve, convert, render, generate.
+    #[command(subcommand)]
+    Maze(maze::MazeCommand),
+}
+
+/// Parses the command line and runs it.
 ///
 /// # Errors
-/// Any failure, as a message for the user.
+/// Bad arguments, unreadable or invalid mazes, or output that cannot be written.
 pub fn run() -> anyhow::Result<()> {
-    Ok(())
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run(args) => run::run(args),
+        Command::Maze(cmd) => maze::run(cmd),
+    }
+}
+
+/// Reads and parses a maze file of either format, with the file name in the error.
+pub(crate) fn load_maze(path: &Path) -> anyhow::Result<Maze> {
+    let bytes = read_capped(path, mazefile::MAX_FILE_BYTES)?;
+    mazefile::parse(&bytes).with_context(|| format!("invalid maze {}", path.display()))
+}
+
+/// Reads at most `cap + 1` bytes of a file, so a huge file is refused without being
+/// read whole.
+fn read_capped(path: &Path, cap: usize) -> anyhow::Result<Vec<u8>> {
+    use std::io::Read;
+    let file =
+        std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let mut bytes = Vec::new();
+    file.take(cap as u64 + 1)
+        .read_to_end(&mut bytes)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    Ok(bytes)
 }

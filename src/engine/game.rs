@@ -377,3 +377,277 @@ impl Game {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::maze::Maze;
+
+    /// A 4x4 maze whose inner walls are all open (goal room: x, y in {1, 2}).
+    fn open_maze(n: u32) -> Maze {
+        let mut m = Maze::closed(n).unwrap();
+        for x in 0..n {
+            for y in 0..n {
+                m.set_open(Position::new(x, y), Heading::Up, true);
+                m.set_open(Position::new(x, y), Heading::Right, true);
+            }
+        }
+        m
+    }
+
+    fn play(game: &mut Game, action: Action) -> StepReport {
+        game.begin_step().expect("a step should be open");
+        game.apply(action)
+    }
+
+    #[test]
+    fn reset_before_goal_is_rejected_and_costs_a_step() {
+        let mut g = Game::new(open_maze(4), GameConfig::default());
+        let r = play(&mut g, Action::RESET);
+        assert_eq!(r.event, StepEvent::ResetRejected);
+        assert_eq!(g.t(), 1);
+        assert_eq!(g.run(), 0);
+        assert_eq!(g.position(), Position::new(0, 0));
+        assert_eq!(r.warnings[0].kind, WarningKind::ResetRejected);
+        assert_eq!(g.run0_steps(), None);
+    }
+
+    #[test]
+    fn reset_step_counts_in_run0_time() {
+        let mut g = Game::new(open_maze(4), GameConfig::default());
+        play(&mut g, Action::turn_move(0, 1)); // (0,1)
+        play(&mut g, Action::turn_move(90, 1)); // (1,1): goal room
+        assert!(g.hit_goal());
+        let r = play(&mut g, Action::RESET); // t = 3
+        assert_eq!(r.event, StepEvent::ResetAccepted);
+        assert_eq!(g.run0_steps(), Some(3));
+        assert_eq!(
+            (g.position(), g.heading()),
+            (Position::new(0, 0), Heading::Up)
+        );
+        // Run 1: 2 steps to the goal room.
+        let s = g.begin_step().unwrap();
+        assert_eq!((s.run, s.step), (1, 4));
+        g.apply(Action::turn_move(0, 1));
+        let r = play(&mut g, Action::turn_move(90, 1));
+        assert_eq!(r.event, StepEvent::GoalReached);
+        assert_eq!(g.end(), Some(GameEnd::Finished));
+        assert_eq!(g.run1_steps(), Some(2));
+        // Score = 2 + 3/30 = 2.100
+        assert_eq!(g.score().unwrap().to_string(), "2.100");
+        assert_eq!(g.begin_step(), None);
+    }
+
+    #[test]
+    fn a_reset_in_run1_is_rejected() {
+        let mut g = Game::new(open_maze(4), GameConfig::default());
+        play(&mut g, Action::turn_move(90, 1)); // (1,0)
+        play(&mut g, Action::turn_move(-90, 1)); // (1,1)
+        play(&mut g, Action::RESET);
+        let r = play(&mut g, Action::RESET);
+        assert_eq!(r.event, StepEvent::ResetRejected);
+        assert_eq!(g.run(), 1);
+        assert_eq!(g.t(), 4);
+    }
+
+    #[test]
+    fn passing_through_the_goal_does_not_count() {
+        // RULES.md: entering counts at the end of a step's movement.
+        let mut m = open_maze(4);
+        // Make column 1 a corridor: from (1,0) up to (1,3) passes (1,1) and (1,2).
+        m.set_open(Position::new(0, 0), Heading::Up, true);
+        let mut g = Game::new(m, GameConfig::default());
+        play(&mut g, Action::turn_move(90, 1)); // (1,0), facing right
+        play(&mut g, Action::turn_move(-90, 3)); // to (1,3) through the goal room
+        assert_eq!(g.position(), Position::new(1, 3));
+        assert!(!g.hit_goal());
+        assert_eq!(play(&mut g, Action::RESET).event, StepEvent::ResetRejected);
+    }
+
+    #[test]
+    fn a_move_into_a_wall_leaves_the_robot_in_place() {
+        let mut g = Game::new(open_maze(4), GameConfig::default());
+        let r = play(&mut g, Action::turn_move(-90, 1)); // facing left at (0,0)
+        assert_eq!(r.position, Position::new(0, 0));
+        assert_eq!(r.heading, Heading::Left);
+        assert!(r.blocked);
+        assert_eq!(g.t(), 1);
+        // A move that is cut short stops at the wall.
+        let r = play(&mut g, Action::turn_move(90, 3)); // up 3 from (0,0): (0,3)
+        assert_eq!((r.position, r.blocked), (Position::new(0, 3), false));
+        let r = play(&mut g, Action::turn_move(0, -3)); // back down 3: (0,0)
+        assert_eq!((r.position, r.blocked), (Position::new(0, 0), false));
+        let r = play(&mut g, Action::turn_move(0, -1));
+        assert_eq!((r.position, r.blocked), (Position::new(0, 0), true));
+    }
+
+    #[test]
+    fn the_budget_is_1000_steps_shared_by_both_runs() {
+        let mut g = Game::new(open_maze(4), GameConfig::default());
+        play(&mut g, Action::turn_move(90, 1));
+        play(&mut g, Action::turn_move(-90, 1));
+        play(&mut g, Action::RESET);
+        let mut steps = 3;
+        while g.begin_step().is_some() {
+            g.apply(Action::turn_move(0, 0));
+            steps += 1;
+        }
+        assert_eq!(steps, 1000);
+        assert_eq!(g.t(), 1000);
+        assert_eq!(g.end(), Some(GameEnd::StepLimit));
+        assert_eq!(g.score(), None);
+        assert_eq!(g.run0_steps(), Some(3));
+        assert_eq!(g.run1_steps(), None);
+    }
+
+    #[test]
+    fn invalid_rotation_means_no_rotation_with_a_warning() {
+        let mut g = Game::new(open_maze(4), GameConfig::default());
+        for rot in [45, 180, 270, -270, i64::MAX] {
+            let r = play(&mut g, Action::turn_move(rot, 0));
+            assert_eq!(r.heading, Heading::Up);
+            assert_eq!(r.warnings.len(), 1);
+            assert_eq!(r.warnings[0].kind, WarningKind::InvalidRotation);
+        }
+        assert_eq!(g.t(), 5);
+        assert_eq!(g.warnings().len(), 5);
+    }
+
+    #[test]
+    fn movement_is_clamped_to_three_with_a_warning() {
+        let mut g = Game::new(open_maze(8), GameConfig::default());
+        let r = play(&mut g, Action::turn_move(0, 7));
+        assert_eq!(r.position, Position::new(0, 3));
+        assert_eq!(r.warnings[0].kind, WarningKind::MovementClamped);
+        let r = play(&mut g, Action::turn_move(0, i64::MIN));
+        assert_eq!(r.position, Position::new(0, 0));
+        assert_eq!(r.warnings[0].kind, WarningKind::MovementClamped);
+        let r = play(&mut g, Action::turn_move(0, 3));
+        assert!(r.warnings.is_empty());
+    }
+
+    #[test]
+    fn on_a_2x2_maze_the_start_counts_only_after_a_step() {
+        let m = Maze::new(2, vec![3, 6, 9, 12]).unwrap();
+        let mut g = Game::new(m, GameConfig::default());
+        assert!(!g.hit_goal());
+        assert_eq!(play(&mut g, Action::RESET).event, StepEvent::ResetRejected);
+        play(&mut g, Action::turn_move(0, 0));
+        assert!(g.hit_goal());
+        play(&mut g, Action::RESET);
+        let r = play(&mut g, Action::turn_move(0, 0));
+        assert_eq!(r.event, StepEvent::GoalReached);
+        assert_eq!(
+            g.score().unwrap(),
+            Score {
+                run0_steps: 3,
+                run1_steps: 1
+            }
+        );
+    }
+
+    mod property {
+        use super::*;
+        use proptest::prelude::*;
+
+        /// A random valid maze: closed, then each inner wall opened with probability 1/2.
+        fn random_maze(n: u32, bits: &[bool]) -> Maze {
+            let mut m = Maze::closed(n).unwrap();
+            let mut it = bits.iter().cycle();
+            for x in 0..n {
+                for y in 0..n {
+                    for side in [Heading::Up, Heading::Right] {
+                        if *it.next().unwrap() {
+                            m.set_open(Position::new(x, y), side, true);
+                        }
+                    }
+                }
+            }
+            m
+        }
+
+        fn action() -> impl Strategy<Value = Action> {
+            prop_oneof![
+                6 => (prop_oneof![Just(-90i64), Just(0), Just(90), any::<i64>()], -5i64..=5)
+                    .prop_map(|(r, m)| Action::turn_move(r, m)),
+                1 => Just(Action::RESET),
+            ]
+        }
+
+        proptest! {
+            #[test]
+            fn random_play_follows_the_rules(
+                half in 1u32..=4,
+                bits in proptest::collection::vec(any::<bool>(), 1..64),
+                actions in proptest::collection::vec(action(), 0..1200),
+            ) {
+                let n = half * 2;
+                let maze = random_maze(n, &bits);
+                let mut g = Game::new(maze.clone(), GameConfig::default());
+                // An independent model of the rules, kept by hand.
+                let (mut pos, mut heading) = (Position::new(0, 0), Heading::Up);
+                let (mut run, mut t, mut seen_goal, mut run0) = (0u8, 0u32, false, None);
+                for action in actions {
+                    let Some(sense) = g.begin_step() else {
+                        prop_assert!(t == 1000 || g.end() == Some(GameEnd::Finished));
+                        break;
+                    };
+                    t += 1;
+                    prop_assert_eq!(sense.step, t);
+                    prop_assert_eq!(sense.run, run);
+                    let expect_sensors = heading.sensor_headings().map(|h| maze.dist_to_wall(pos, h));
+                    prop_assert_eq!(sense.sensors, expect_sensors);
+                    let r = g.apply(action);
+                    match action {
+                        Action::Reset { .. } => {
+                            if run == 0 && seen_goal {
+                                prop_assert_eq!(r.event, StepEvent::ResetAccepted);
+                                run = 1;
+                                run0 = Some(t);
+                                pos = Position::new(0, 0);
+                                heading = Heading::Up;
+                            } else {
+                                prop_assert_eq!(r.event, StepEvent::ResetRejected);
+                            }
+                        }
+                        Action::Move { rotation, movement } => {
+                            heading = match rotation {
+                                90 => heading.clockwise(),
+                                -90 => heading.counter_clockwise(),
+                                _ => heading,
+                            };
+                            let dir = if movement < 0 { heading.reverse() } else { heading };
+                            let want = movement.clamp(-3, 3).unsigned_abs();
+                            // Walk cell by cell; every crossed side must be open.
+                            let mut moved = 0;
+                            while moved < want && maze.is_open(pos, dir) {
+                                pos = pos.step(dir, n).expect("closed perimeter keeps us on the grid");
+                                moved += 1;
+                            }
+                            prop_assert!(pos.x < n && pos.y < n);
+                            prop_assert_eq!(r.position, pos);
+                            prop_assert_eq!(r.heading, heading);
+                            prop_assert_eq!(r.blocked, moved < want);
+                            if maze.is_goal(pos) {
+                                if run == 0 {
+                                    seen_goal = true;
+                                } else {
+                                    prop_assert_eq!(r.event, StepEvent::GoalReached);
+                                    let score = g.score().unwrap();
+                                    let run0 = run0.unwrap();
+                                    prop_assert_eq!(score.run0_steps, run0);
+                                    prop_assert_eq!(score.run1_steps, t - run0);
+                                    let exact = (t - run0) as f64 + run0 as f64 / 30.0;
+                                    prop_assert!((score.value() - exact).abs() <= 0.0005);
+                                    break;
+                                }
+                            }
+                        }
+                    }
+                    prop_assert_eq!(g.t(), t);
+                    prop_assert!(t <= 1000);
+                }
+            }
+        }
+    }
+}

@@ -70,7 +70,9 @@ pub enum StructureError {
         b_state: &'static str,
     },
     /// A cell on the border is open towards the outside.
-    #[error("the outer perimeter is open at cell {cell} on its {side} side (a robot could walk off the grid)")]
+    #[error(
+        "the outer perimeter is open at cell {cell} on its {side} side (a robot could walk off the grid)"
+    )]
     OpenPerimeter {
         /// The border cell.
         cell: Position,
@@ -100,7 +102,7 @@ impl Maze {
     /// The first [`StructureError`] found, checked in the order: side, cell count,
     /// values, wall consistency (column by column), perimeter.
     pub fn new(dim: u32, cells: Vec<u32>) -> Result<Maze, StructureError> {
-        if dim < MIN_DIM || dim % 2 != 0 {
+        if dim < MIN_DIM || !dim.is_multiple_of(2) {
             return Err(StructureError::BadDimension { dim });
         }
         let expected = dim as usize * dim as usize;
@@ -128,7 +130,7 @@ impl Maze {
     /// # Errors
     /// [`StructureError::BadDimension`] for an odd or too small side.
     pub fn closed(dim: u32) -> Result<Maze, StructureError> {
-        if dim < MIN_DIM || dim % 2 != 0 {
+        if dim < MIN_DIM || !dim.is_multiple_of(2) {
             return Err(StructureError::BadDimension { dim });
         }
         Ok(Maze {

@@ -5,9 +5,11 @@
 //! exact step. The bot runner, storage and CLI are layers around it.
 
 pub mod game;
+pub mod generator;
 pub mod geometry;
 pub mod maze;
 pub mod mazefile;
+pub mod render;
 pub mod score;
 pub mod solver;
 

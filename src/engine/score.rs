@@ -49,7 +49,10 @@ mod tests {
     #[test]
     fn rules_example_is_60() {
         // RULES.md: run0 = 900 steps, run1 = 30 steps -> 30 + 900/30 = 60.000.
-        let s = Score { run0_steps: 900, run1_steps: 30 };
+        let s = Score {
+            run0_steps: 900,
+            run1_steps: 30,
+        };
         assert_eq!(s.to_string(), "60.000");
         assert_eq!(s.value(), 60.0);
     }
@@ -57,9 +60,37 @@ mod tests {
     #[test]
     fn thirds_round_to_three_decimals() {
         // 17 + 34/30 = 18.1333...; 20 + 104/30 = 23.4666... -> 23.467
-        assert_eq!(Score { run0_steps: 34, run1_steps: 17 }.to_string(), "18.133");
-        assert_eq!(Score { run0_steps: 104, run1_steps: 20 }.to_string(), "23.467");
-        assert_eq!(Score { run0_steps: 104, run1_steps: 20 }.value(), 23.467);
-        assert_eq!(Score { run0_steps: 1, run1_steps: 0 }.to_string(), "0.033");
+        assert_eq!(
+            Score {
+                run0_steps: 34,
+                run1_steps: 17
+            }
+            .to_string(),
+            "18.133"
+        );
+        assert_eq!(
+            Score {
+                run0_steps: 104,
+                run1_steps: 20
+            }
+            .to_string(),
+            "23.467"
+        );
+        assert_eq!(
+            Score {
+                run0_steps: 104,
+                run1_steps: 20
+            }
+            .value(),
+            23.467
+        );
+        assert_eq!(
+            Score {
+                run0_steps: 1,
+                run1_steps: 0
+            }
+            .to_string(),
+            "0.033"
+        );
     }
 }

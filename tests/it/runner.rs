@@ -1,1 +1,277 @@
-//! placeholder
+//! The bot runner against real subprocess bots: one fixture per failure mode, exact
+//! step counts with a scripted bot, and no process left behind.
+
+use std::time::Duration;
+
+use mazearena::engine::{Action, solver};
+use mazearena::runner::{BotSpec, Limits, MatchRecord, MatchStatus, run_match};
+
+use crate::support::{classic, fixture_bot, live_group_members, root};
+
+fn limits() -> Limits {
+    Limits {
+        startup_timeout: Some(Duration::from_secs(5)),
+        move_timeout: Some(Duration::from_millis(1000)),
+        ..Limits::default()
+    }
+}
+
+async fn play(bot: BotSpec, limits: Limits) -> MatchRecord {
+    let record = run_match(&bot, &classic(1), 7, limits, |_| {}).await;
+    let pgid = record.bot_pid.expect("the bot was started");
+    assert_eq!(
+        live_group_members(pgid),
+        Vec::<u32>::new(),
+        "processes of the bot's group are still alive after the match"
+    );
+    record
+}
+
+fn reason(r: &MatchRecord) -> &str {
+    &r.error.as_ref().expect("a failure is recorded").reason
+}
+
+/// Answers for one run: the solver's optimal actions as `rot,mov` arguments.
+fn optimal_script(n: u32) -> Vec<String> {
+    let solution = solver::solve(&classic(n)).unwrap();
+    solution
+        .actions
+        .iter()
+        .map(|a| match a {
+            Action::Move { rotation, movement } => format!("{rotation},{movement}"),
+            Action::Reset { .. } => "reset".to_string(),
+        })
+        .collect()
+}
+
+#[tokio::test]
+async fn not_json_is_a_protocol_error_with_the_line() {
+    let r = play(fixture_bot("not_json", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::ProtocolError);
+    assert!(reason(&r).contains("not JSON"), "{}", reason(&r));
+    assert_eq!(r.error.as_ref().unwrap().line.as_deref(), Some("hello"));
+    assert_eq!(r.total_steps, 1);
+    assert_eq!(r.score, None);
+}
+
+#[tokio::test]
+async fn not_an_object_is_a_protocol_error() {
+    let r = play(fixture_bot("not_object", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::ProtocolError);
+    assert!(reason(&r).contains("not an object"), "{}", reason(&r));
+}
+
+#[tokio::test]
+async fn a_float_movement_is_a_protocol_error() {
+    let r = play(fixture_bot("float_move", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::ProtocolError);
+    assert!(
+        reason(&r).contains("\"movement\" must be a JSON integer"),
+        "{}",
+        reason(&r)
+    );
+}
+
+#[tokio::test]
+async fn a_missing_field_is_a_protocol_error() {
+    let r = play(fixture_bot("missing_field", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::ProtocolError);
+    assert!(
+        reason(&r).contains("no \"movement\" field"),
+        "{}",
+        reason(&r)
+    );
+}
+
+#[tokio::test]
+async fn invalid_utf8_is_a_protocol_error() {
+    let r = play(fixture_bot("invalid_utf8", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::ProtocolError);
+    assert!(reason(&r).contains("UTF-8"), "{}", reason(&r));
+    assert!(r.error.as_ref().unwrap().line.is_some());
+}
+
+#[tokio::test]
+async fn a_100_kb_line_is_a_protocol_error_cut_to_200_bytes() {
+    let r = play(fixture_bot("long_line", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::ProtocolError);
+    assert!(
+        reason(&r).contains("longer than 65536 bytes"),
+        "{}",
+        reason(&r)
+    );
+    let line = r.error.as_ref().unwrap().line.as_ref().unwrap();
+    assert!(line.len() <= 200 + 3, "excerpt is {} bytes", line.len());
+}
+
+#[tokio::test]
+async fn a_silent_bot_times_out_at_startup() {
+    let limits = Limits {
+        startup_timeout: Some(Duration::from_millis(1500)),
+        ..limits()
+    };
+    let r = play(fixture_bot("silent", &[]), limits).await;
+    assert_eq!(r.status, MatchStatus::Timeout);
+    assert!(
+        reason(&r).contains("startup limit of 1500 ms"),
+        "{}",
+        reason(&r)
+    );
+    assert_eq!(r.total_steps, 1);
+}
+
+#[tokio::test]
+async fn a_slow_start_times_out() {
+    let limits = Limits {
+        startup_timeout: Some(Duration::from_millis(1000)),
+        ..limits()
+    };
+    let r = play(fixture_bot("slow_start", &[]), limits).await;
+    assert_eq!(r.status, MatchStatus::Timeout);
+    assert!(reason(&r).contains("startup"), "{}", reason(&r));
+}
+
+#[tokio::test]
+async fn a_slow_move_times_out_at_step_2() {
+    let limits = Limits {
+        move_timeout: Some(Duration::from_millis(300)),
+        ..limits()
+    };
+    let r = play(fixture_bot("slow_move", &[]), limits).await;
+    assert_eq!(r.status, MatchStatus::Timeout);
+    assert_eq!(r.total_steps, 2);
+    assert!(
+        reason(&r).contains("move limit of 300 ms"),
+        "{}",
+        reason(&r)
+    );
+    assert_eq!(r.trace.len(), 1);
+}
+
+#[tokio::test]
+async fn a_bot_that_exits_early_has_crashed_with_its_exit_code_and_stderr() {
+    let r = play(fixture_bot("exits_early", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::Crashed);
+    let error = r.error.as_ref().unwrap();
+    assert_eq!(error.exit_code, Some(3));
+    assert_eq!(error.signal, None);
+    assert!(!r.stderr_tail.trim().is_empty(), "the stderr tail is kept");
+}
+
+#[tokio::test]
+async fn a_bot_killed_by_a_signal_has_crashed_with_the_signal() {
+    let r = play(fixture_bot("killed_by_signal", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::Crashed);
+    let error = r.error.as_ref().unwrap();
+    assert_eq!(error.signal, Some(9));
+    assert_eq!(error.exit_code, None);
+}
+
+#[tokio::test]
+async fn a_forking_bot_leaves_no_process_behind() {
+    let limits = Limits {
+        startup_timeout: Some(Duration::from_millis(1500)),
+        ..limits()
+    };
+    // `play` asserts that the whole process group, the `sleep` child included, is gone.
+    let r = play(fixture_bot("forker", &[]), limits).await;
+    assert_eq!(r.status, MatchStatus::Timeout);
+}
+
+#[tokio::test]
+async fn a_stderr_flood_is_kept_to_a_bounded_tail() {
+    let r = play(fixture_bot("stderr_flood", &[]), limits()).await;
+    assert_eq!(r.status, MatchStatus::StepLimit);
+    assert_eq!(r.total_steps, 1000);
+    assert!(
+        r.stderr_tail.len() <= 64 * 1024 + 100,
+        "{}",
+        r.stderr_tail.len()
+    );
+    assert!(r.stderr_tail.starts_with("[... "));
+}
+
+#[tokio::test]
+async fn a_command_that_cannot_start_has_crashed() {
+    let bot = BotSpec {
+        command: "./no-such-bot --fast".into(),
+        dir: root().to_path_buf(),
+    };
+    let r = run_match(&bot, &classic(1), 0, limits(), |_| {}).await;
+    assert_eq!(r.status, MatchStatus::Crashed);
+    assert!(reason(&r).contains("could not start"), "{}", reason(&r));
+    assert_eq!(r.total_steps, 0);
+}
+
+#[tokio::test]
+async fn an_optimal_script_scores_exactly_by_the_rules() {
+    // Run 0: the 17 optimal steps, then a reset (step 18, counted in run 0);
+    // run 1: the same 17 steps. Score = 17 + 18/30 = 17.600.
+    let script = optimal_script(1);
+    assert_eq!(script.len(), 17);
+    let mut args: Vec<&str> = script.iter().map(String::as_str).collect();
+    args.push("reset");
+    args.extend(script.iter().map(String::as_str));
+    let r = play(fixture_bot("scripted", &args), limits()).await;
+    assert_eq!(r.status, MatchStatus::Finished, "{:?}", r.error);
+    assert_eq!(r.run0_steps, Some(18));
+    assert_eq!(r.run1_steps, Some(17));
+    assert_eq!(r.total_steps, 35);
+    assert_eq!(r.score, Some(17.6));
+    assert_eq!(r.trace.len(), 35);
+    assert_eq!(r.trace[0].report.sensors, [0, 11, 0]);
+    assert!(r.warnings.is_empty());
+}
+
+#[tokio::test]
+async fn an_early_reset_and_lenient_answers_are_counted_and_warned() {
+    // Step 1: reset before the goal (rejected, costs a step); step 2: rotation 45
+    // (no rotation, warning); step 3: movement 9 (clamped to 3, warning).
+    let r = play(fixture_bot("scripted", &["reset", "45,0", "0,9"]), limits()).await;
+    assert_eq!(r.status, MatchStatus::StepLimit);
+    assert_eq!(r.total_steps, 1000);
+    assert_eq!(r.run0_steps, None);
+    let kinds: Vec<String> = r
+        .warnings
+        .iter()
+        .map(|w| format!("{}:{:?}", w.step, w.kind))
+        .collect();
+    assert_eq!(
+        kinds,
+        ["1:ResetRejected", "2:InvalidRotation", "3:MovementClamped"]
+    );
+    // Maze 01 has 11 open cells ahead at the start: the clamped move goes 3 up.
+    assert_eq!(
+        r.trace[2].report.position,
+        mazearena::engine::Position::new(0, 3)
+    );
+}
+
+#[tokio::test]
+async fn many_matches_run_at_once() {
+    let script = optimal_script(1);
+    let mut args: Vec<String> = script.clone();
+    args.push("reset".into());
+    args.extend(script);
+    let tasks: Vec<_> = (0..8)
+        .map(|seed| {
+            let args = args.clone();
+            tokio::spawn(async move {
+                let args: Vec<&str> = args.iter().map(String::as_str).collect();
+                run_match(
+                    &fixture_bot("scripted", &args),
+                    &classic(1),
+                    seed,
+                    limits(),
+                    |_| {},
+                )
+                .await
+            })
+        })
+        .collect();
+    for t in tasks {
+        let r = t.await.unwrap();
+        assert_eq!(r.status, MatchStatus::Finished);
+        assert_eq!(r.score, Some(17.6));
+    }
+}

@@ -103,7 +103,10 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<&str, MazeError> {
 }
 
 /// Maps a structural error to the line where its cell is written.
-pub(crate) fn structure_error(error: StructureError, line_of: impl Fn(Position) -> usize) -> MazeError {
+pub(crate) fn structure_error(
+    error: StructureError,
+    line_of: impl Fn(Position) -> usize,
+) -> MazeError {
     let line = error.cell().map_or(1, line_of);
     MazeError::Structure { line, error }
 }

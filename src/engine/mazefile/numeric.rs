@@ -74,10 +74,10 @@ fn parse_dimension(line: &str) -> Result<u32, MazeError> {
             format!("the first line must be the maze side n (digits only), found {ch:?}"),
         ));
     }
-    let dim: u32 = line.parse().map_err(|_| {
-        MazeError::syntax(1, 1, format!("the maze side {line} is too large"))
-    })?;
-    if dim < 2 || dim % 2 != 0 {
+    let dim: u32 = line
+        .parse()
+        .map_err(|_| MazeError::syntax(1, 1, format!("the maze side {line} is too large")))?;
+    if dim < 2 || !dim.is_multiple_of(2) {
         return Err(MazeError::syntax(
             1,
             1,
@@ -176,23 +176,77 @@ mod tests {
     fn round_trip() {
         let m = parse(TWO.as_bytes()).unwrap();
         assert_eq!(write(&m), TWO);
-        assert!(parse(TWO.trim_end().as_bytes()).is_ok(), "final newline is optional");
-        assert!(parse(b"2\n03,006\n9,12").is_ok(), "leading zeros are allowed");
+        assert!(
+            parse(TWO.trim_end().as_bytes()).is_ok(),
+            "final newline is optional"
+        );
+        assert!(
+            parse(b"2\n03,006\n9,12").is_ok(),
+            "leading zeros are allowed"
+        );
     }
 
     #[test]
     fn errors_name_line_and_column() {
         assert_eq!(err("").line(), Some(1));
-        assert_eq!(err("2\n3,6\n9,x2\n"), MazeError::syntax(3, 3, "'x' is not a digit: values are plain decimal numbers 0..15"));
-        assert!(matches!(err("2\n3,6\n9,16\n"), MazeError::Syntax { line: 3, column: 3, .. }));
-        assert!(matches!(err("2\r\n3,6\n9,12\n"), MazeError::Syntax { line: 1, column: 2, .. }));
-        assert!(matches!(err("2\n3,6\n9,12\n\n"), MazeError::Syntax { line: 4, .. }));
-        assert!(matches!(err("2\n3,6,1\n9,12\n"), MazeError::Syntax { line: 2, column: 5, .. }));
-        assert!(matches!(err("2\n3\n9,12\n"), MazeError::Syntax { line: 2, .. }));
+        assert_eq!(
+            err("2\n3,6\n9,x2\n"),
+            MazeError::syntax(
+                3,
+                3,
+                "'x' is not a digit: values are plain decimal numbers 0..15"
+            )
+        );
+        assert!(matches!(
+            err("2\n3,6\n9,16\n"),
+            MazeError::Syntax {
+                line: 3,
+                column: 3,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("2\r\n3,6\n9,12\n"),
+            MazeError::Syntax {
+                line: 1,
+                column: 2,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("2\n3,6\n9,12\n\n"),
+            MazeError::Syntax { line: 4, .. }
+        ));
+        assert!(matches!(
+            err("2\n3,6,1\n9,12\n"),
+            MazeError::Syntax {
+                line: 2,
+                column: 5,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("2\n3\n9,12\n"),
+            MazeError::Syntax { line: 2, .. }
+        ));
         assert!(matches!(err("2\n3,6\n"), MazeError::Syntax { line: 3, .. }));
         assert!(matches!(err("3\n"), MazeError::Syntax { line: 1, .. }));
-        assert!(matches!(err("-2\n"), MazeError::Syntax { line: 1, column: 1, .. }));
-        assert!(matches!(err("2\n3, 6\n9,12\n"), MazeError::Syntax { line: 2, column: 3, .. }));
+        assert!(matches!(
+            err("-2\n"),
+            MazeError::Syntax {
+                line: 1,
+                column: 1,
+                ..
+            }
+        ));
+        assert!(matches!(
+            err("2\n3, 6\n9,12\n"),
+            MazeError::Syntax {
+                line: 2,
+                column: 3,
+                ..
+            }
+        ));
     }
 
     #[test]
@@ -209,6 +263,13 @@ mod tests {
     fn oversized_and_non_utf8_files_are_rejected() {
         let big = vec![b'1'; super::super::MAX_FILE_BYTES + 1];
         assert!(matches!(parse(&big), Err(MazeError::TooLarge { .. })));
-        assert!(matches!(parse(b"2\n3,\xff\n"), Err(MazeError::Syntax { line: 2, column: 3, .. })));
+        assert!(matches!(
+            parse(b"2\n3,\xff\n"),
+            Err(MazeError::Syntax {
+                line: 2,
+                column: 3,
+                ..
+            })
+        ));
     }
 }

@@ -1,0 +1,180 @@
+//! `mazearena run`: referee one match locally and print the result.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::engine::game::StepEvent;
+use crate::runner::{self, BotSpec, Limits, MatchRecord, MatchStatus, TraceStep};
+
+/// Arguments of `mazearena run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The maze file (numeric or ASCII format).
+    #[arg(long)]
+    maze: PathBuf,
+    /// The bot's command line, split like a shell (no shell is run), e.g. 'python3 bot.py'.
+    #[arg(long)]
+    bot: String,
+    /// The bot's working directory (default: the current directory).
+    #[arg(long)]
+    bot_dir: Option<PathBuf>,
+    /// The seed sent to the bot in the start message.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Print one JSON object with the result instead of the progress text.
+    #[arg(long)]
+    json: bool,
+    /// Time limit for every answer after the first, in milliseconds.
+    #[arg(long, default_value_t = runner::DEFAULT_MOVE_TIMEOUT.as_millis() as u64)]
+    move_timeout_ms: u64,
+    /// Time limit for the first answer (includes the interpreter's start), in milliseconds.
+    #[arg(long, default_value_t = runner::DEFAULT_STARTUP_TIMEOUT.as_millis() as u64)]
+    startup_timeout_ms: u64,
+    /// No time limits at all (to debug a bot step by step).
+    #[arg(long)]
+    no_timeout: bool,
+    /// The bot's address-space limit in MiB (0: no limit).
+    #[arg(long, default_value_t = runner::DEFAULT_MEMORY_LIMIT_MB)]
+    memory_limit_mb: u64,
+    /// Write the full match record with its per-step trace (JSON) to this file.
+    #[arg(long)]
+    replay: Option<PathBuf>,
+}
+
+/// Runs `mazearena run`.
+///
+/// # Errors
+/// A bad maze, a missing bot directory, or a replay file that cannot be written. What
+/// the bot does is never an error: it is the match's status.
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let maze = super::load_maze(&args.maze)?;
+    let dir = match &args.bot_dir {
+        Some(d) => d.clone(),
+        None => std::env::current_dir().context("cannot read the current directory")?,
+    };
+    anyhow::ensure!(
+        dir.is_dir(),
+        "the bot directory {} does not exist",
+        dir.display()
+    );
+    let limits = Limits {
+        startup_timeout: (!args.no_timeout).then(|| Duration::from_millis(args.startup_timeout_ms)),
+        move_timeout: (!args.no_timeout).then(|| Duration::from_millis(args.move_timeout_ms)),
+        memory_limit_mb: (args.memory_limit_mb > 0).then_some(args.memory_limit_mb),
+        ..Limits::default()
+    };
+    let bot = BotSpec {
+        command: args.bot.clone(),
+        dir,
+    };
+    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
+    let json = args.json;
+    if !json {
+        println!(
+            "Maze {} ({}x{}), bot `{}`, seed {}",
+            args.maze.display(),
+            maze.dim(),
+            maze.dim(),
+            args.bot,
+            args.seed
+        );
+        println!("Starting run 0.");
+    }
+    let record = runtime.block_on(runner::run_match(&bot, &maze, args.seed, limits, |step| {
+        if !json {
+            print_step(step);
+        }
+    }));
+    if let Some(path) = &args.replay {
+        let text = serde_json::to_string(&record).context("cannot encode the match record")?;
+        std::fs::write(path, text)
+            .with_context(|| format!("cannot write the replay to {}", path.display()))?;
+    }
+    if json {
+        let summary =
+            serde_json::to_string(&summary_json(&record)).context("cannot encode the result")?;
+        println!("{summary}");
+    } else {
+        print_result(&record);
+    }
+    Ok(())
+}
+
+/// The `--json` result: the record without its trace, plus the fields named in the docs.
+fn summary_json(record: &MatchRecord) -> serde_json::Value {
+    // A record always serializes to an object.
+    let mut value = serde_json::to_value(record.summary()).unwrap_or_default();
+    if let Some(obj) = value.as_object_mut() {
+        obj.remove("trace");
+    }
+    value
+}
+
+fn print_step(step: &TraceStep) {
+    let r = &step.report;
+    for w in &r.warnings {
+        println!("step {}: warning: {}", w.step, w.message);
+    }
+    match r.event {
+        StepEvent::ResetAccepted => {
+            println!("Ending first run at step {}. Starting next run.", r.step);
+            println!("Starting run 1.");
+        }
+        StepEvent::GoalReached => println!("Goal found at step {}; run 1 completed!", r.step),
+        StepEvent::Move | StepEvent::ResetRejected => {}
+    }
+    let _ = std::io::stdout().flush();
+}
+
+fn print_result(record: &MatchRecord) {
+    let steps = |s: Option<u32>| s.map_or("-".to_string(), |n| n.to_string());
+    match record.status {
+        MatchStatus::Finished => {
+            println!(
+                "Run 0: {} steps, run 1: {} steps, {} warning(s).",
+                steps(record.run0_steps),
+                steps(record.run1_steps),
+                record.warnings.len()
+            );
+            if let Some(score) = record.score {
+                println!("Task complete! Score: {score:.3}");
+            }
+        }
+        MatchStatus::StepLimit => {
+            println!("Allotted time exceeded: the 1000-step budget ran out.");
+            println!(
+                "Match did not finish (step_limit). Run 0: {} steps.",
+                steps(record.run0_steps)
+            );
+        }
+        status => {
+            println!(
+                "Match did not finish ({status}) at step {}.",
+                record.total_steps
+            );
+        }
+    }
+    if let Some(error) = &record.error {
+        println!("Reason: {}", error.reason);
+        if let Some(line) = &error.line {
+            println!("Offending line: {line}");
+        }
+        if let Some(code) = error.exit_code {
+            println!("Exit code: {code}");
+        }
+        if let Some(signal) = error.signal {
+            println!("Killed by signal {signal}");
+        }
+        let tail: Vec<&str> = record.stderr_tail.lines().rev().take(20).collect();
+        if !tail.is_empty() {
+            println!("Last lines of the bot's stderr:");
+            for line in tail.into_iter().rev() {
+                println!("  | {line}");
+            }
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! What a match produces: its status, the failure details and the match record that a
+//! replay viewer reads and a user can re-run to the exact step.
+
+use serde::{Deserialize, Serialize};
+
+use crate::engine::game::{StepReport, Warning};
+
+/// How a match ended (the `status` of PROTOCOL-v1's end message).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MatchStatus {
+    /// Run 1 reached the goal room: the match has a score.
+    Finished,
+    /// The 1000-step budget ran out.
+    StepLimit,
+    /// The bot did not answer within its time limit.
+    Timeout,
+    /// The bot could not be started, exited, or closed its pipes before the end.
+    Crashed,
+    /// The bot sent something that is not a valid answer.
+    ProtocolError,
+}
+
+impl MatchStatus {
+    /// The wire name, e.g. `step_limit`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MatchStatus::Finished => "finished",
+            MatchStatus::StepLimit => "step_limit",
+            MatchStatus::Timeout => "timeout",
+            MatchStatus::Crashed => "crashed",
+            MatchStatus::ProtocolError => "protocol_error",
+        }
+    }
+}
+
+impl std::fmt::Display for MatchStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Why a bot's match ended early: kept with the record so the bot's author can see it.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Failure {
+    /// A sentence saying what went wrong.
+    pub reason: String,
+    /// The offending line, cut to 200 bytes (protocol errors).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line: Option<String>,
+    /// The bot's exit code, if it exited.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exit_code: Option<i32>,
+    /// The signal that ended the bot, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal: Option<i32>,
+}
+
+/// The limits a match was played under.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LimitsRecord {
+    /// The shared step budget.
+    pub max_steps: u32,
+    /// Time for the first answer, from the process start; `None`: no limit.
+    pub startup_timeout_ms: Option<u64>,
+    /// Time for every later answer; `None`: no limit.
+    pub move_timeout_ms: Option<u64>,
+    /// The bot's address-space limit in MiB; `None`: no limit.
+    pub memory_limit_mb: Option<u64>,
+}
+
+/// How long things took.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Timings {
+    /// Wall time of the whole match, start of the process to its end, in ms.
+    pub wall_ms: u64,
+    /// CPU time (user + system) the bot used, with its waited-for children, in ms, when
+    /// the operating system reports it.
+    pub bot_cpu_ms: Option<u64>,
+    /// The slowest answer, in microseconds.
+    pub max_answer_us: u64,
+    /// The mean answer time, in microseconds.
+    pub mean_answer_us: u64,
+}
+
+/// One step of the trace: the referee's report plus the bot's answer time.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TraceStep {
+    /// What the step did.
+    #[serde(flatten)]
+    pub report: StepReport,
+    /// Time from sending the sense message (first step: from the process start) to the
+    /// answer line, in microseconds.
+    pub answer_us: u64,
+}
+
+/// Everything about one match: enough to show it, score it, and re-run it exactly.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchRecord {
+    /// The version of the referee that played it.
+    pub engine_version: String,
+    /// The bot protocol version.
+    pub protocol: u32,
+    /// SHA-256 of the maze's canonical numeric text.
+    pub maze_hash: String,
+    /// The maze side.
+    pub maze_dim: u32,
+    /// The seed sent to the bot.
+    pub seed: u64,
+    /// The limits in force.
+    pub limits: LimitsRecord,
+    /// How the match ended.
+    pub status: MatchStatus,
+    /// The score, only when finished (3 decimals).
+    pub score: Option<f64>,
+    /// Steps of run 0, once a reset was accepted.
+    pub run0_steps: Option<u32>,
+    /// Steps of run 1, only when finished.
+    pub run1_steps: Option<u32>,
+    /// The counter `t` when the match ended (PROTOCOL-v1 "Counts in the result").
+    pub total_steps: u32,
+    /// Lenient-rule warnings.
+    pub warnings: Vec<Warning>,
+    /// Failure details when the bot misbehaved.
+    pub error: Option<Failure>,
+    /// The end of the bot's stderr (at most 64 KiB).
+    pub stderr_tail: String,
+    /// How long things took.
+    pub timings: Timings,
+    /// The bot's process id (also its process group id) while it ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bot_pid: Option<u32>,
+    /// Every step, in order.
+    #[serde(default)]
+    pub trace: Vec<TraceStep>,
+}
+
+impl MatchRecord {
+    /// The record without its trace, for summaries.
+    pub fn summary(&self) -> MatchRecord {
+        MatchRecord {
+            trace: Vec::new(),
+            ..self.clone()
+        }
+    }
+}
