@@ -96,22 +96,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     }
     if json {
         let summary =
-            serde_json::to_string(&summary_json(&record)).context("cannot encode the result")?;
+            serde_json::to_string(&record.summary()).context("cannot encode the result")?;
         println!("{summary}");
     } else {
         print_result(&record);
     }
     Ok(())
-}
-
-/// The `--json` result: the record without its trace, plus the fields named in the docs.
-fn summary_json(record: &MatchRecord) -> serde_json::Value {
-    // A record always serializes to an object.
-    let mut value = serde_json::to_value(record.summary()).unwrap_or_default();
-    if let Some(obj) = value.as_object_mut() {
-        obj.remove("trace");
-    }
-    value
 }
 
 fn print_step(step: &TraceStep) {

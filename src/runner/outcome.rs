@@ -130,8 +130,8 @@ pub struct MatchRecord {
     /// The bot's process id (also its process group id) while it ran.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bot_pid: Option<u32>,
-    /// Every step, in order.
-    #[serde(default)]
+    /// Every step, in order (left out of summaries).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub trace: Vec<TraceStep>,
 }
 

@@ -34,11 +34,16 @@ pub enum MazeError {
         /// The rule that is broken, naming the cell(s).
         error: StructureError,
     },
-    /// The file is larger than [`MAX_FILE_BYTES`].
-    #[error("the file is {bytes} bytes; maze files are limited to 1 MiB ({MAX_FILE_BYTES} bytes)")]
+    /// The file is larger than [`MAX_FILE_BYTES`]; the place where it passes the limit
+    /// is named.
+    #[error(
+        "line {line}, column {column}: the file goes past the 1 MiB limit here (maze files are at most {MAX_FILE_BYTES} bytes)"
+    )]
     TooLarge {
-        /// Size found.
-        bytes: usize,
+        /// 1-based line where the limit is passed.
+        line: usize,
+        /// 1-based column (in bytes) where the limit is passed.
+        column: usize,
     },
 }
 
@@ -51,11 +56,12 @@ impl MazeError {
         }
     }
 
-    /// The 1-based line the error points at, if any.
-    pub fn line(&self) -> Option<usize> {
+    /// The 1-based line the error points at.
+    pub fn line(&self) -> usize {
         match self {
-            MazeError::Syntax { line, .. } | MazeError::Structure { line, .. } => Some(*line),
-            MazeError::TooLarge { .. } => None,
+            MazeError::Syntax { line, .. }
+            | MazeError::Structure { line, .. }
+            | MazeError::TooLarge { line, .. } => *line,
         }
     }
 }
@@ -91,7 +97,11 @@ pub fn parse(bytes: &[u8]) -> Result<Maze, MazeError> {
 /// Checks the size and decodes UTF-8, naming the line and column of a bad byte.
 pub(crate) fn decode(bytes: &[u8]) -> Result<&str, MazeError> {
     if bytes.len() > MAX_FILE_BYTES {
-        return Err(MazeError::TooLarge { bytes: bytes.len() });
+        let head = &bytes[..MAX_FILE_BYTES];
+        let line = head.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column =
+            MAX_FILE_BYTES - head.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1) + 1;
+        return Err(MazeError::TooLarge { line, column });
     }
     std::str::from_utf8(bytes).map_err(|e| {
         let good = &bytes[..e.valid_up_to()];

@@ -188,7 +188,7 @@ mod tests {
 
     #[test]
     fn errors_name_line_and_column() {
-        assert_eq!(err("").line(), Some(1));
+        assert_eq!(err("").line(), 1);
         assert_eq!(
             err("2\n3,6\n9,x2\n"),
             MazeError::syntax(
