@@ -74,11 +74,3 @@ pub fn live_group_members(pgid: u32) -> Vec<u32> {
     }
     found
 }
-
-/// Whether a command is available on this machine.
-pub fn have(program: &str) -> bool {
-    Command::new(program)
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success())
-}
