@@ -275,3 +275,15 @@ async fn many_matches_run_at_once() {
         assert_eq!(r.score, Some(17.6));
     }
 }
+
+#[tokio::test]
+async fn a_memory_hog_is_stopped_by_the_memory_limit() {
+    let limits = Limits {
+        memory_limit_mb: Some(512),
+        ..limits()
+    };
+    let r = play(fixture_bot("memory_hog", &[]), limits).await;
+    assert_eq!(r.status, MatchStatus::Crashed);
+    assert!(r.stderr_tail.contains("MemoryError"), "{}", r.stderr_tail);
+    assert_eq!(r.limits.memory_limit_mb, Some(512));
+}
