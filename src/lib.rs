@@ -7,7 +7,13 @@
 //! - [`runner`]: runs one bot process against one maze and returns a [`runner::MatchRecord`].
 //! - [`cli`]: the `mazearena` command line.
 
+pub mod api;
+pub mod botfiles;
 pub mod cli;
 pub mod engine;
+pub mod manifest;
+pub mod metrics;
 pub mod protocol;
 pub mod runner;
+pub mod storage;
+pub mod worker;

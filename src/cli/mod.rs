@@ -3,6 +3,8 @@
 
 mod maze;
 mod run;
+mod serve;
+mod tournament;
 
 use std::path::Path;
 
@@ -28,6 +30,10 @@ pub enum Command {
     /// Maze tools: validate, solve, convert, render, generate.
     #[command(subcommand)]
     Maze(maze::MazeCommand),
+    /// Run the match server: HTTP API, SQLite storage, match workers.
+    Serve(serve::ServeArgs),
+    /// Run a tournament locally (no server): every bot on every maze, into the database.
+    Tournament(tournament::TournamentArgs),
 }
 
 /// Parses the command line and runs it.
@@ -39,6 +45,8 @@ pub fn run() -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run::run(args),
         Command::Maze(cmd) => maze::run(cmd),
+        Command::Serve(args) => serve::run(args),
+        Command::Tournament(args) => tournament::run(args),
     }
 }
 

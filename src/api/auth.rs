@@ -1,0 +1,118 @@
+//! Who is calling: an admin (the server's admin token), the holder of some bot's owner
+//! token, or nobody. Tokens come as `Authorization: Bearer TOKEN` and are compared by
+//! their SHA-256, the form in which owner tokens are stored.
+
+use axum::extract::FromRequestParts;
+use axum::http::header;
+use axum::http::request::Parts;
+use sha2::{Digest, Sha256};
+
+use super::AppState;
+use super::error::ApiError;
+
+/// The caller of a request.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Caller {
+    /// No token.
+    Anonymous,
+    /// The admin token.
+    Admin,
+    /// Some other token (maybe a bot's owner token), by its hash.
+    Token(String),
+}
+
+/// SHA-256 of a token, hex.
+pub fn hash_token(token: &str) -> String {
+    Sha256::digest(token.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// A new random token: 32 bytes as hex.
+///
+/// # Errors
+/// When the operating system has no randomness to give.
+pub fn new_token() -> Result<String, ApiError> {
+    let mut bytes = [0u8; 32];
+    getrandom::fill(&mut bytes).map_err(|e| ApiError::Internal(format!("no randomness: {e}")))?;
+    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+impl FromRequestParts<AppState> for Caller {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(
+        parts: &mut Parts,
+        state: &AppState,
+    ) -> Result<Self, Self::Rejection> {
+        let Some(value) = parts.headers.get(header::AUTHORIZATION) else {
+            return Ok(Caller::Anonymous);
+        };
+        let token = value
+            .to_str()
+            .ok()
+            .and_then(|v| v.strip_prefix("Bearer "))
+            .map(str::trim)
+            .filter(|t| !t.is_empty())
+            .ok_or_else(|| {
+                ApiError::Unauthorized("the Authorization header must be `Bearer TOKEN`".into())
+            })?;
+        let hash = hash_token(token);
+        if hash == state.settings.admin_token_hash {
+            Ok(Caller::Admin)
+        } else {
+            Ok(Caller::Token(hash))
+        }
+    }
+}
+
+impl Caller {
+    /// Whether this is the admin.
+    pub fn is_admin(&self) -> bool {
+        matches!(self, Caller::Admin)
+    }
+
+    /// Refuses anyone but the admin: 401 without a token, 403 with another one.
+    ///
+    /// # Errors
+    /// As said.
+    pub fn require_admin(&self) -> Result<(), ApiError> {
+        match self {
+            Caller::Admin => Ok(()),
+            Caller::Anonymous => Err(ApiError::Unauthorized(
+                "this needs the admin token (Authorization: Bearer TOKEN)".into(),
+            )),
+            Caller::Token(_) => Err(ApiError::Forbidden("this needs the admin token".into())),
+        }
+    }
+
+    /// Whether the caller is the admin or holds `bot_id`'s owner token.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn owns(&self, state: &AppState, bot_id: i64) -> Result<bool, ApiError> {
+        Ok(match self {
+            Caller::Admin => true,
+            Caller::Anonymous => false,
+            Caller::Token(hash) => state.storage.is_bot_owner(bot_id, hash).await?,
+        })
+    }
+
+    /// Refuses anyone but the admin and `bot_id`'s owner: 401 without a token, 403
+    /// with another one.
+    ///
+    /// # Errors
+    /// As said, or database failures.
+    pub async fn require_owner(&self, state: &AppState, bot_id: i64) -> Result<(), ApiError> {
+        if self.owns(state, bot_id).await? {
+            return Ok(());
+        }
+        Err(match self {
+            Caller::Anonymous => ApiError::Unauthorized(format!(
+                "this needs bot {bot_id}'s owner token or the admin token (Authorization: Bearer TOKEN)"
+            )),
+            _ => ApiError::Forbidden(format!("this token is not bot {bot_id}'s owner token")),
+        })
+    }
+}

@@ -1,0 +1,324 @@
+//! Matches: queue one (owner or admin), see its result, its replay, and its log.
+
+use axum::extract::State;
+use axum::http::StatusCode;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use utoipa::ToSchema;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
+
+use super::AppState;
+use super::auth::Caller;
+use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
+use super::mazes::{find_maze, hidden_error};
+use crate::storage::matches::MatchRow;
+
+pub(super) fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(create_match))
+        .routes(routes!(get_match))
+        .routes(routes!(get_match_replay))
+        .routes(routes!(get_match_log))
+}
+
+/// Seconds a client is told to wait when the queue is full.
+pub const RETRY_AFTER_SECS: u64 = 30;
+
+/// A match to queue.
+#[derive(Debug, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MatchRequest {
+    /// The bot (its latest version plays).
+    pub bot_id: i64,
+    /// The maze (public, unless the admin asks).
+    pub maze_id: i64,
+    /// Seed sent to the bot; random if omitted.
+    #[serde(default)]
+    pub seed: Option<u32>,
+}
+
+/// The answer to a queued match.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MatchQueued {
+    /// The new match.
+    pub match_id: i64,
+    /// Always `queued`.
+    pub status: &'static str,
+    /// The version that will play.
+    pub bot_version: i64,
+    /// The seed.
+    pub seed: u32,
+}
+
+/// A match as anyone may see it.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MatchView {
+    /// Id.
+    pub match_id: i64,
+    /// The bot.
+    pub bot_id: i64,
+    /// The bot version that played.
+    pub bot_version: i64,
+    /// The maze.
+    pub maze_id: i64,
+    /// The tournament, if any.
+    pub tournament_id: Option<i64>,
+    /// The seed.
+    pub seed: i64,
+    /// queued, running, finished, step_limit, timeout, crashed, protocol_error.
+    pub status: String,
+    /// Score when finished.
+    pub score: Option<f64>,
+    /// Run-0 steps (once a reset was accepted).
+    pub run0_steps: Option<i64>,
+    /// Run-1 steps (when finished).
+    pub run1_steps: Option<i64>,
+    /// The step counter when the match ended.
+    pub total_steps: Option<i64>,
+    /// How many times a worker started it.
+    pub attempts: i64,
+    /// Queued at (unix ms).
+    pub created_at: i64,
+    /// Last started at (unix ms).
+    pub started_at: Option<i64>,
+    /// Finished at (unix ms).
+    pub finished_at: Option<i64>,
+    /// Lenient-rule warnings.
+    #[schema(value_type = Vec<Object>)]
+    pub warnings: Value,
+    /// The limits it was played under.
+    #[schema(value_type = Object)]
+    pub limits: Value,
+    /// SHA-256 of the maze layout.
+    pub maze_hash: Option<String>,
+    /// The referee's version.
+    pub engine_version: Option<String>,
+    /// Wall time, bot CPU time, answer times.
+    #[schema(value_type = Object)]
+    pub timings: Value,
+}
+
+/// A match's per-step trace, with the maze to replay it on.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct ReplayView {
+    /// Id.
+    pub match_id: i64,
+    /// Final status.
+    pub status: String,
+    /// The maze.
+    pub maze_id: i64,
+    /// Side.
+    pub maze_dim: i64,
+    /// The maze's canonical numeric text.
+    pub maze_layout: String,
+    /// Every step: run, step, sensors, action, event, position, heading, warnings, answer_us.
+    #[schema(value_type = Vec<Object>)]
+    pub trace: Value,
+}
+
+/// A match's failure details and the bot's stderr tail (owner or admin).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct LogView {
+    /// Id.
+    pub match_id: i64,
+    /// Final status.
+    pub status: String,
+    /// Reason, offending line, exit code, signal; null if the bot did nothing wrong.
+    #[schema(value_type = Object)]
+    pub error: Value,
+    /// The last 64 KiB of the bot's stderr.
+    pub stderr_tail: String,
+}
+
+/// Queue a match of a bot's latest version on a maze (owner token or admin).
+#[utoipa::path(post, path = "/api/matches", tag = "matches",
+    request_body = MatchRequest,
+    security(("bearer" = [])),
+    responses(
+        (status = 202, body = MatchQueued),
+        (status = 400, body = ErrorBody), (status = 401, body = ErrorBody),
+        (status = 403, body = ErrorBody), (status = 404, body = ErrorBody),
+        (status = 429, body = ErrorBody, description = "queue full; see Retry-After"),
+    ))]
+async fn create_match(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppJson(body): AppJson<MatchRequest>,
+) -> ApiResult<(StatusCode, axum::Json<MatchQueued>)> {
+    let bot = state
+        .storage
+        .get_bot(body.bot_id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no bot {}", body.bot_id)))?;
+    caller.require_owner(&state, bot.bot_id).await?;
+    let maze = find_maze(&state, body.maze_id).await?;
+    if maze.hidden && !caller.is_admin() {
+        return Err(hidden_error(maze.maze_id, &caller));
+    }
+    check_capacity(&state, 1).await?;
+    let seed = match body.seed {
+        Some(s) => s,
+        None => random_seed()?,
+    };
+    let match_id = state
+        .storage
+        .queue_match(bot.bot_version_id, maze.maze_id, i64::from(seed))
+        .await?;
+    state.wake.notify_waiters();
+    Ok((
+        StatusCode::ACCEPTED,
+        axum::Json(MatchQueued {
+            match_id,
+            status: "queued",
+            bot_version: bot.version,
+            seed,
+        }),
+    ))
+}
+
+/// A match: status, score, steps, warnings, limits, seed, maze hash, engine version, timings.
+#[utoipa::path(get, path = "/api/matches/{id}", tag = "matches",
+    params(("id" = i64, Path, description = "match id")),
+    responses((status = 200, body = MatchView), (status = 404, body = ErrorBody)))]
+async fn get_match(
+    State(state): State<AppState>,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<axum::Json<MatchView>> {
+    let row = find_match(&state, id).await?;
+    let record = parse_record(&row);
+    let field = |k: &str| record.get(k).cloned().unwrap_or(Value::Null);
+    Ok(axum::Json(MatchView {
+        match_id: row.match_id,
+        bot_id: row.bot_id,
+        bot_version: row.version,
+        maze_id: row.maze_id,
+        tournament_id: row.tournament_id,
+        seed: row.seed,
+        status: row.status.clone(),
+        score: row.score,
+        run0_steps: row.run0_steps,
+        run1_steps: row.run1_steps,
+        total_steps: row.total_steps,
+        attempts: row.attempts,
+        created_at: row.created_at,
+        started_at: row.started_at,
+        finished_at: row.finished_at,
+        warnings: record
+            .get("warnings")
+            .cloned()
+            .unwrap_or_else(|| Value::Array(vec![])),
+        limits: field("limits"),
+        maze_hash: record
+            .get("maze_hash")
+            .and_then(Value::as_str)
+            .map(String::from),
+        engine_version: record
+            .get("engine_version")
+            .and_then(Value::as_str)
+            .map(String::from),
+        timings: field("timings"),
+    }))
+}
+
+/// The per-step trace and the maze (hidden mazes: the bot's owner or the admin).
+#[utoipa::path(get, path = "/api/matches/{id}/replay", tag = "matches",
+    params(("id" = i64, Path, description = "match id")),
+    responses(
+        (status = 200, body = ReplayView),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody, description = "not played yet"),
+    ))]
+async fn get_match_replay(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<axum::Json<ReplayView>> {
+    let row = find_match(&state, id).await?;
+    if row.maze_hidden && !caller.owns(&state, row.bot_id).await? {
+        return Err(hidden_error(row.maze_id, &caller));
+    }
+    let trace = state.storage.get_trace(id).await?.ok_or_else(|| {
+        ApiError::Conflict(format!(
+            "match {id} has not been played yet ({})",
+            row.status
+        ))
+    })?;
+    let maze = find_maze(&state, row.maze_id).await?;
+    Ok(axum::Json(ReplayView {
+        match_id: id,
+        status: row.status,
+        maze_id: maze.maze_id,
+        maze_dim: maze.dim,
+        maze_layout: maze.layout,
+        trace: serde_json::from_str(&trace).unwrap_or(Value::Array(vec![])),
+    }))
+}
+
+/// The bot's stderr tail and failure details (the bot's owner or the admin).
+#[utoipa::path(get, path = "/api/matches/{id}/log", tag = "matches",
+    params(("id" = i64, Path, description = "match id")),
+    security(("bearer" = [])),
+    responses(
+        (status = 200, body = LogView),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody), (status = 404, body = ErrorBody),
+    ))]
+async fn get_match_log(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<axum::Json<LogView>> {
+    let row = find_match(&state, id).await?;
+    caller.require_owner(&state, row.bot_id).await?;
+    let record = parse_record(&row);
+    Ok(axum::Json(LogView {
+        match_id: id,
+        status: row.status,
+        error: record.get("error").cloned().unwrap_or(Value::Null),
+        stderr_tail: record
+            .get("stderr_tail")
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string(),
+    }))
+}
+
+async fn find_match(state: &AppState, id: i64) -> ApiResult<MatchRow> {
+    state
+        .storage
+        .get_match(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))
+}
+
+fn parse_record(row: &MatchRow) -> serde_json::Map<String, Value> {
+    row.record
+        .as_deref()
+        .and_then(|r| serde_json::from_str::<Value>(r).ok())
+        .and_then(|v| match v {
+            Value::Object(map) => Some(map),
+            _ => None,
+        })
+        .unwrap_or_default()
+}
+
+/// Refuses new matches beyond the queue's capacity (429 with Retry-After).
+pub(super) async fn check_capacity(state: &AppState, adding: i64) -> ApiResult<()> {
+    let queued = state.storage.queued_count().await?;
+    if queued + adding > state.settings.max_queue {
+        return Err(ApiError::TooManyRequests {
+            message: format!(
+                "the match queue is full ({queued} waiting, capacity {}); try again later",
+                state.settings.max_queue
+            ),
+            retry_after_secs: RETRY_AFTER_SECS,
+        });
+    }
+    Ok(())
+}
+
+fn random_seed() -> ApiResult<u32> {
+    let mut b = [0u8; 4];
+    getrandom::fill(&mut b).map_err(|e| ApiError::Internal(format!("no randomness: {e}")))?;
+    Ok(u32::from_le_bytes(b))
+}

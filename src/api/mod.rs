@@ -1,0 +1,128 @@
+//! The HTTP/JSON API (axum): thin handlers that extract, call storage, and answer JSON.
+//!
+//! Routes (see `GET /api/openapi.json`, generated from these handlers):
+//! bots, mazes, matches, tournaments, leaderboard, plus `/healthz` and `/metrics`.
+//! Every error has the shape `{"error":{"code":..,"message":..}}` ([`error`]).
+
+pub mod auth;
+pub mod bots;
+pub mod error;
+pub mod leaderboard;
+pub mod matches;
+pub mod mazes;
+pub mod system;
+pub mod tournaments;
+
+use std::future::Future;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use axum::Router;
+use axum::extract::DefaultBodyLimit;
+use axum::http::StatusCode;
+use tokio::net::TcpListener;
+use tokio::sync::Notify;
+use tower_http::catch_panic::CatchPanicLayer;
+use tower_http::compression::CompressionLayer;
+use tower_http::timeout::TimeoutLayer;
+use tower_http::trace::TraceLayer;
+use utoipa::OpenApi;
+use utoipa_axum::router::OpenApiRouter;
+
+use crate::metrics::Metrics;
+use crate::storage::Storage;
+
+/// Largest request body outside bot uploads: a 1 MiB maze plus its JSON envelope.
+pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
+
+/// Largest bot upload body (an archive, base64 in JSON or raw in a form).
+pub const MAX_UPLOAD_BYTES: usize = 32 * 1024 * 1024;
+
+/// How long one request may take before it is answered 408.
+pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// Server settings the handlers need.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    /// SHA-256 of the admin token.
+    pub admin_token_hash: String,
+    /// Where uploaded bots are stored.
+    pub data_dir: PathBuf,
+    /// The most matches that may wait in the queue; beyond it, 429.
+    pub max_queue: i64,
+}
+
+/// What every handler gets: cheap to clone.
+#[derive(Debug, Clone)]
+pub struct AppState {
+    /// The database.
+    pub storage: Storage,
+    /// Settings.
+    pub settings: Arc<Settings>,
+    /// Metrics.
+    pub metrics: Metrics,
+    /// Wakes the workers when matches are queued.
+    pub wake: Arc<Notify>,
+}
+
+/// The OpenAPI document's header; paths come from the handlers.
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "mazearena",
+        description = "Match server for the micromouse maze task: bots, mazes, matches, tournaments, leaderboards."
+    ),
+    components(schemas(error::ErrorBody))
+)]
+pub struct ApiDoc;
+
+/// The OpenAPI document of every route, built once.
+pub fn openapi() -> &'static utoipa::openapi::OpenApi {
+    static DOC: std::sync::OnceLock<utoipa::openapi::OpenApi> = std::sync::OnceLock::new();
+    DOC.get_or_init(|| routes().1)
+}
+
+/// All routes with their OpenAPI description.
+pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
+    OpenApiRouter::with_openapi(ApiDoc::openapi())
+        .merge(bots::router())
+        .merge(mazes::router())
+        .merge(matches::router())
+        .merge(tournaments::router())
+        .merge(leaderboard::router())
+        .merge(system::router())
+        .split_for_parts()
+}
+
+/// The application: routes, JSON fallbacks and the middleware stack.
+pub fn app(state: AppState) -> Router {
+    let (router, _) = routes();
+    router
+        .fallback(error::not_found)
+        .method_not_allowed_fallback(error::method_not_allowed)
+        .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))
+        .layer(CompressionLayer::new())
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            REQUEST_TIMEOUT,
+        ))
+        .layer(CatchPanicLayer::custom(system::panic_response))
+        .layer(TraceLayer::new_for_http())
+        .with_state(state)
+}
+
+/// Serves the API on `listener` until `shutdown` completes, then finishes the requests
+/// in flight.
+///
+/// # Errors
+/// When the listener fails.
+pub async fn serve(
+    listener: TcpListener,
+    state: AppState,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
+    axum::serve(listener, app(state))
+        .with_graceful_shutdown(shutdown)
+        .await
+}

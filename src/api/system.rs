@@ -1,0 +1,76 @@
+//! Health, metrics, the OpenAPI document, and the JSON answer to a handler panic.
+
+use std::any::Any;
+
+use axum::extract::State;
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::Serialize;
+use utoipa::ToSchema;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
+
+use super::AppState;
+use super::error::{ApiError, ApiResult};
+
+pub(super) fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(healthz))
+        .routes(routes!(metrics))
+        .routes(routes!(openapi_json))
+}
+
+/// Health of the server.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct Health {
+    /// `ok` when the database answers.
+    pub status: &'static str,
+    /// Matches waiting to be played.
+    pub queued: i64,
+}
+
+/// Liveness and database check.
+#[utoipa::path(get, path = "/healthz", tag = "system",
+    responses((status = 200, body = Health), (status = 500, body = super::error::ErrorBody)))]
+async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>> {
+    state.storage.ping().await?;
+    let queued = state.storage.queued_count().await?;
+    Ok(axum::Json(Health {
+        status: "ok",
+        queued,
+    }))
+}
+
+/// Prometheus metrics: matches by status, queue depth, match duration histogram.
+#[utoipa::path(get, path = "/metrics", tag = "system",
+    responses((status = 200, description = "Prometheus text format", content_type = "text/plain")))]
+async fn metrics(State(state): State<AppState>) -> ApiResult<Response> {
+    let text = state.metrics.render(&state.storage).await?;
+    Ok((
+        [(
+            header::CONTENT_TYPE,
+            "application/openmetrics-text; version=1.0.0; charset=utf-8",
+        )],
+        text,
+    )
+        .into_response())
+}
+
+/// This API's OpenAPI 3 document.
+#[utoipa::path(get, path = "/api/openapi.json", tag = "system",
+    responses((status = 200, description = "OpenAPI document", content_type = "application/json")))]
+async fn openapi_json() -> Response {
+    axum::Json(super::openapi()).into_response()
+}
+
+/// Turns a handler panic into a JSON 500 (the details go to the log).
+pub(super) fn panic_response(err: Box<dyn Any + Send + 'static>) -> Response {
+    let detail = err
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| err.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "unknown panic".to_string());
+    let mut response = ApiError::Internal(format!("handler panicked: {detail}")).into_response();
+    *response.status_mut() = StatusCode::INTERNAL_SERVER_ERROR;
+    response
+}

@@ -1,0 +1,231 @@
+//! `mazearena serve`: the match server (HTTP API + match workers).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Args;
+use tokio::net::TcpListener;
+use tokio::sync::Notify;
+use tokio_util::task::TaskTracker;
+
+use crate::api::{self, AppState, Settings, auth};
+use crate::metrics::Metrics;
+use crate::runner::Limits;
+use crate::storage::Storage;
+use crate::worker::{self, Shutdown, WorkerConfig};
+
+/// The project's own mazes, loaded as the default public set on first start.
+pub const DEFAULT_MAZES: &[(&str, &str)] = &[
+    ("gen-12-s1", include_str!("../../mazes/gen-12-s1.txt")),
+    ("gen-12-s2", include_str!("../../mazes/gen-12-s2.txt")),
+    ("gen-12-s3", include_str!("../../mazes/gen-12-s3.txt")),
+    ("gen-14-s1", include_str!("../../mazes/gen-14-s1.txt")),
+    ("gen-14-s2", include_str!("../../mazes/gen-14-s2.txt")),
+    ("gen-14-s3", include_str!("../../mazes/gen-14-s3.txt")),
+    ("gen-16-s1", include_str!("../../mazes/gen-16-s1.txt")),
+    ("gen-16-s2", include_str!("../../mazes/gen-16-s2.txt")),
+    ("gen-16-s3", include_str!("../../mazes/gen-16-s3.txt")),
+];
+
+/// Settings of `mazearena serve`; every flag can also come from its `MAZEARENA_*` variable.
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    /// Address to listen on (port 0: any free port; the chosen address is printed).
+    #[arg(long, env = "MAZEARENA_BIND", default_value = "127.0.0.1:8080")]
+    bind: String,
+    /// The SQLite database, created on first start.
+    #[arg(
+        long,
+        env = "MAZEARENA_DATABASE",
+        default_value = "sqlite://mazearena.db"
+    )]
+    database: String,
+    /// Where uploaded bots' files are kept.
+    #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
+    data_dir: PathBuf,
+    /// Match workers, at most one per core (default: the number of cores).
+    #[arg(long, env = "MAZEARENA_JOBS")]
+    jobs: Option<usize>,
+    /// The admin token (uploading mazes, tournaments). If unset, one is generated and
+    /// printed at start.
+    #[arg(long, env = "MAZEARENA_ADMIN_TOKEN", hide_env_values = true)]
+    admin_token: Option<String>,
+    /// The most matches that may wait in the queue; more are refused with 429.
+    #[arg(long, env = "MAZEARENA_MAX_QUEUE", default_value_t = 10_000)]
+    max_queue: i64,
+    /// Lease on a running match, in seconds: a match whose worker died is re-queued
+    /// this long after its last renewal.
+    #[arg(long, env = "MAZEARENA_LEASE_SECS", default_value_t = worker::DEFAULT_LEASE.as_secs())]
+    lease_secs: u64,
+    /// On SIGINT/SIGTERM, how long running matches may take to finish before they are
+    /// stopped and re-queued, in seconds.
+    #[arg(long, env = "MAZEARENA_SHUTDOWN_GRACE_SECS", default_value_t = 10)]
+    shutdown_grace_secs: u64,
+}
+
+/// Runs the server until SIGINT or SIGTERM.
+///
+/// # Errors
+/// When the database, the data directory or the address cannot be used.
+pub fn run(args: ServeArgs) -> anyhow::Result<()> {
+    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
+    runtime.block_on(serve(args))
+}
+
+async fn serve(args: ServeArgs) -> anyhow::Result<()> {
+    std::fs::create_dir_all(&args.data_dir).with_context(|| {
+        format!(
+            "cannot create the data directory {}",
+            args.data_dir.display()
+        )
+    })?;
+    let data_dir = args
+        .data_dir
+        .canonicalize()
+        .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
+    let storage = Storage::open(&args.database)
+        .await
+        .with_context(|| format!("cannot open the database {}", args.database))?;
+    let requeued = storage.requeue_expired().await?;
+    if requeued > 0 {
+        tracing::warn!(
+            count = requeued,
+            "re-queued matches left running by an earlier server"
+        );
+    }
+    load_default_mazes(&storage).await?;
+
+    let admin_token = match args.admin_token.filter(|t| !t.trim().is_empty()) {
+        Some(t) => t,
+        None => {
+            let t = auth::new_token().map_err(|e| anyhow::anyhow!("{e}"))?;
+            eprintln!("admin token (generated; set MAZEARENA_ADMIN_TOKEN to choose one): {t}");
+            t
+        }
+    };
+    let cores = worker::cores();
+    let jobs = args.jobs.unwrap_or(cores).clamp(1, cores);
+    if args.jobs.is_some_and(|j| j > cores) {
+        eprintln!(
+            "--jobs {} lowered to {cores}: one bot process per core keeps timing fair",
+            args.jobs.unwrap_or(0)
+        );
+    }
+    let metrics = Metrics::new();
+    let wake = Arc::new(Notify::new());
+    let state = AppState {
+        storage: storage.clone(),
+        settings: Arc::new(Settings {
+            admin_token_hash: auth::hash_token(&admin_token),
+            data_dir,
+            max_queue: args.max_queue,
+        }),
+        metrics: metrics.clone(),
+        wake: wake.clone(),
+    };
+
+    let listener = TcpListener::bind(&args.bind)
+        .await
+        .with_context(|| format!("cannot listen on {}", args.bind))?;
+    let addr = listener.local_addr()?;
+    println!("mazearena listening on http://{addr} ({jobs} match workers)");
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+
+    let shutdown = Shutdown::default();
+    let tracker = TaskTracker::new();
+    worker::spawn_workers(
+        &tracker,
+        storage.clone(),
+        WorkerConfig {
+            jobs,
+            lease: Duration::from_secs(args.lease_secs.max(1)),
+            limits: Limits::default(),
+            only_tournament: None,
+            exit_when_idle: false,
+        },
+        Some(metrics),
+        wake,
+        shutdown.clone(),
+        None,
+    );
+    tracker.close();
+
+    let stop = shutdown.stop_claiming.clone();
+    tokio::spawn(async move {
+        wait_for_signal().await;
+        tracing::info!("shutting down: no new matches are started");
+        stop.cancel();
+    });
+    let http_stop = shutdown.stop_claiming.clone();
+    api::serve(listener, state, async move { http_stop.cancelled().await })
+        .await
+        .context("the HTTP server failed")?;
+
+    let grace = Duration::from_secs(args.shutdown_grace_secs);
+    if tokio::time::timeout(grace, tracker.wait()).await.is_err() {
+        tracing::warn!("running matches did not finish in time: stopping them and re-queueing");
+        shutdown.abort.cancel();
+        tracker.wait().await;
+    }
+    storage.close().await;
+    eprintln!("mazearena stopped");
+    Ok(())
+}
+
+/// Stores the shipped mazes as public mazes when the database has none.
+async fn load_default_mazes(storage: &Storage) -> anyhow::Result<()> {
+    if storage.count_mazes().await? > 0 {
+        return Ok(());
+    }
+    for (name, text) in DEFAULT_MAZES {
+        api::mazes::store_maze(storage, name, text.as_bytes(), false)
+            .await
+            .map_err(|e| anyhow::anyhow!("cannot load the default maze {name}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// Resolves on SIGINT or SIGTERM.
+async fn wait_for_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {}
+        _ = term => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_shipped_maze_is_embedded() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("mazes");
+        let mut on_disk: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".txt"))
+            .map(|n| n.trim_end_matches(".txt").to_string())
+            .collect();
+        on_disk.sort();
+        let embedded: Vec<String> = DEFAULT_MAZES.iter().map(|(n, _)| n.to_string()).collect();
+        assert_eq!(on_disk, embedded);
+    }
+}

@@ -1,0 +1,377 @@
+//! `mazearena tournament`: a tournament without a server. Bots come from `bot.toml`
+//! manifests and run from their own folders; results go to the same database as the
+//! server's, through the same queue and workers.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use sha2::{Digest, Sha256};
+use tokio::sync::Notify;
+use tokio_util::task::TaskTracker;
+
+use crate::api::auth;
+use crate::engine::mazefile::numeric;
+use crate::engine::solver;
+use crate::manifest::{self, BotManifest};
+use crate::runner::Limits;
+use crate::storage::Storage;
+use crate::storage::bots::NewVersion;
+use crate::storage::leaderboard::{Scope, Standing};
+use crate::storage::mazes::NewMaze;
+use crate::worker::{self, Shutdown, WorkerConfig};
+
+/// Arguments of `mazearena tournament`.
+#[derive(Debug, Args)]
+pub struct TournamentArgs {
+    /// Bots: `bot.toml` files, folders holding one, or folders searched for them.
+    #[arg(long, num_args = 1.., required = true)]
+    bots: Vec<PathBuf>,
+    /// Mazes: files (either format) or folders of `.txt` maze files.
+    #[arg(long, num_args = 1.., required = true)]
+    mazes: Vec<PathBuf>,
+    /// How many times each bot plays each maze (seeds 0, 1, ...).
+    #[arg(long, default_value_t = 1)]
+    repeats: i64,
+    /// Parallel matches, at most one per core (default: the number of cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// The database to write to (the server's, if you like).
+    #[arg(
+        long,
+        env = "MAZEARENA_DATABASE",
+        default_value = "sqlite://mazearena.db"
+    )]
+    database: String,
+    /// The tournament's name.
+    #[arg(long, default_value = "local tournament")]
+    name: String,
+    /// Print the result as JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `mazearena tournament`.
+///
+/// # Errors
+/// Bad manifests or mazes, a failing build command, or the database.
+pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (1..=100).contains(&args.repeats),
+        "--repeats must be 1 to 100"
+    );
+    let mut bots = Vec::new();
+    for path in &args.bots {
+        bots.extend(manifest::load(path)?);
+    }
+    let mut names = std::collections::BTreeSet::new();
+    for b in &bots {
+        anyhow::ensure!(
+            names.insert(b.name.clone()),
+            "two bots are named {:?}",
+            b.name
+        );
+    }
+    let maze_files = maze_files(&args.mazes)?;
+    for b in &bots {
+        build(b)?;
+    }
+    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
+    runtime.block_on(play(args, bots, maze_files))
+}
+
+fn maze_files(paths: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                .with_context(|| format!("cannot list {}", p.display()))?
+                .flatten()
+                .map(|e| e.path())
+                .filter(|f| f.is_file() && f.extension().is_some_and(|e| e == "txt"))
+                .collect();
+            found.sort();
+            anyhow::ensure!(!found.is_empty(), "no .txt maze files in {}", p.display());
+            files.extend(found);
+        } else {
+            files.push(p.clone());
+        }
+    }
+    Ok(files)
+}
+
+/// Runs a bot's build command in its folder, if it has one.
+fn build(bot: &BotManifest) -> anyhow::Result<()> {
+    let Some(cmd) = &bot.build else { return Ok(()) };
+    let words = shlex::split(cmd)
+        .filter(|w| !w.is_empty())
+        .with_context(|| format!("{}: the build command {cmd:?} cannot be split", bot.name))?;
+    eprintln!("building {} ({cmd})", bot.name);
+    let status = std::process::Command::new(&words[0])
+        .args(&words[1..])
+        .current_dir(&bot.dir)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .with_context(|| format!("{}: cannot run the build command {cmd:?}", bot.name))?;
+    anyhow::ensure!(
+        status.success(),
+        "{}: the build command {cmd:?} failed ({status})",
+        bot.name
+    );
+    Ok(())
+}
+
+async fn play(
+    args: TournamentArgs,
+    bots: Vec<BotManifest>,
+    maze_files: Vec<PathBuf>,
+) -> anyhow::Result<()> {
+    let storage = Storage::open(&args.database)
+        .await
+        .with_context(|| format!("cannot open the database {}", args.database))?;
+    storage.requeue_expired().await?;
+    let mut version_ids = Vec::new();
+    for b in &bots {
+        version_ids.push(register(&storage, b).await?);
+    }
+    let mut maze_ids = Vec::new();
+    for f in &maze_files {
+        maze_ids.push(store_maze(&storage, f).await?);
+    }
+    let t = storage
+        .create_tournament(&args.name, &version_ids, &maze_ids, args.repeats)
+        .await?;
+    let cores = worker::cores();
+    let jobs = args.jobs.unwrap_or(cores).clamp(1, cores);
+    if !args.json {
+        eprintln!(
+            "tournament {}: {} bots x {} mazes x {} repeats = {} matches, {jobs} at a time",
+            t.tournament_id,
+            bots.len(),
+            maze_ids.len(),
+            args.repeats,
+            t.total
+        );
+    }
+    let bar = if std::io::stderr().is_terminal() && !args.json {
+        let bar = ProgressBar::new(t.total as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} matches  {elapsed_precise}  eta {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let started = Instant::now();
+    let tracker = TaskTracker::new();
+    let shutdown = Shutdown::default();
+    let progress = bar.clone();
+    worker::spawn_workers(
+        &tracker,
+        storage.clone(),
+        WorkerConfig {
+            jobs,
+            lease: worker::DEFAULT_LEASE,
+            limits: Limits::default(),
+            only_tournament: Some(t.tournament_id),
+            exit_when_idle: true,
+        },
+        None,
+        Arc::new(Notify::new()),
+        shutdown.clone(),
+        Some(Arc::new(move |_| progress.inc(1))),
+    );
+    tracker.close();
+    let abort = shutdown.clone();
+    let interrupted = tokio::spawn(async move {
+        let _ = tokio::signal::ctrl_c().await;
+        abort.stop_claiming.cancel();
+        abort.abort.cancel();
+    });
+    // The reaper exits with the workers: stop it once every worker has left.
+    let workers_done = tracker.wait();
+    tokio::pin!(workers_done);
+    loop {
+        tokio::select! {
+            _ = &mut workers_done => break,
+            _ = tokio::time::sleep(Duration::from_millis(200)) => {
+                let done = storage.get_tournament(t.tournament_id).await?.map_or(0, |t| t.done);
+                if done >= t.total {
+                    shutdown.stop_claiming.cancel();
+                }
+            }
+        }
+    }
+    interrupted.abort();
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+    let t = storage
+        .get_tournament(t.tournament_id)
+        .await?
+        .context("the tournament vanished from the database")?;
+    let standings = storage
+        .leaderboard(Scope::Tournament(t.tournament_id))
+        .await?;
+    if args.json {
+        let rows: Vec<serde_json::Value> = standings.iter().map(standing_json).collect();
+        println!(
+            "{}",
+            serde_json::json!({
+                "tournament_id": t.tournament_id,
+                "name": t.name,
+                "total": t.total,
+                "done": t.done,
+                "elapsed_ms": elapsed.as_millis() as u64,
+                "standings": rows,
+            })
+        );
+    } else {
+        print_table(&standings);
+        let per_min = t.done as f64 / elapsed.as_secs_f64().max(1e-9) * 60.0;
+        println!(
+            "{}/{} matches in {:.1} s ({per_min:.0} matches per minute); tournament id {}",
+            t.done,
+            t.total,
+            elapsed.as_secs_f64(),
+            t.tournament_id
+        );
+    }
+    storage.close().await;
+    anyhow::ensure!(
+        t.done == t.total,
+        "interrupted: {} of {} matches played",
+        t.done,
+        t.total
+    );
+    Ok(())
+}
+
+/// Finds or registers a local bot; a new version when its command or files changed.
+async fn register(storage: &Storage, bot: &BotManifest) -> anyhow::Result<i64> {
+    let dir = bot.dir.display().to_string();
+    let hash = dir_hash(&bot.dir, &bot.command);
+    let new = NewVersion {
+        command: &bot.command,
+        dir: &dir,
+        files_sha256: &hash,
+        file_count: 0,
+    };
+    if let Some(existing) = storage.get_bot_by_name(&bot.name).await? {
+        let latest = storage
+            .get_bot_version(existing.bot_version_id)
+            .await?
+            .context("a bot's latest version vanished")?;
+        if latest.files_sha256 == hash && latest.dir == dir {
+            return Ok(latest.bot_version_id);
+        }
+        return Ok(storage
+            .add_bot_version(existing.bot_id, &new)
+            .await?
+            .bot_version_id);
+    }
+    // Bots registered locally are owned by the admin: their owner token is never shown.
+    let token = auth::new_token().map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(storage
+        .create_bot(&bot.name, &auth::hash_token(&token), &new)
+        .await?
+        .bot_version_id)
+}
+
+async fn store_maze(storage: &Storage, path: &Path) -> anyhow::Result<i64> {
+    let maze = crate::cli::load_maze(path)?;
+    if let Some(row) = storage.get_maze_by_hash(&maze.hash()).await? {
+        return Ok(row.maze_id);
+    }
+    let name = path
+        .file_stem()
+        .map_or_else(|| "maze".into(), |s| s.to_string_lossy().into_owned());
+    let optimum = solver::solve(&maze).map(|s| s.steps as i64);
+    Ok(storage
+        .insert_maze(&NewMaze {
+            name: &name,
+            hash: &maze.hash(),
+            dim: maze.dim() as i64,
+            layout: &numeric::write(&maze),
+            hidden: false,
+            optimum,
+        })
+        .await?
+        .maze_id)
+}
+
+/// A content hash of a bot folder and its command (skipping build output folders), so
+/// that an edited bot gets a new version.
+fn dir_hash(dir: &Path, command: &str) -> String {
+    let mut files = Vec::new();
+    walk(dir, dir, 0, &mut files);
+    files.sort();
+    let mut h = Sha256::new();
+    h.update(command.as_bytes());
+    for (rel, path) in files {
+        h.update(b"\0");
+        h.update(rel.as_bytes());
+        h.update(b"\0");
+        if let Ok(bytes) = std::fs::read(&path) {
+            h.update(&bytes);
+        }
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn walk(root: &Path, dir: &Path, depth: usize, out: &mut Vec<(String, PathBuf)>) {
+    if depth > 6 || out.len() > 5000 {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.')
+            || ["target", "node_modules", "__pycache__"].contains(&name.as_str())
+        {
+            continue;
+        }
+        let p = e.path();
+        if p.is_dir() {
+            walk(root, &p, depth + 1, out);
+        } else if p.is_file() {
+            let rel = p.strip_prefix(root).unwrap_or(&p).display().to_string();
+            out.push((rel, p));
+        }
+    }
+}
+
+fn standing_json(s: &Standing) -> serde_json::Value {
+    serde_json::json!({
+        "rank": s.rank, "bot_id": s.bot_id, "name": s.name, "version": s.version,
+        "played": s.played, "finished": s.finished, "mean_score": s.mean_score,
+        "finish_rate": s.finish_rate, "mean_ratio": s.mean_ratio,
+    })
+}
+
+fn print_table(rows: &[Standing]) {
+    let width = rows.iter().map(|r| r.name.len()).max().unwrap_or(4).max(4);
+    println!(
+        "{:>4}  {:<width$}  {:>10}  {:>8}  {:>10}  {:>6}",
+        "rank", "bot", "mean score", "finished", "vs optimum", "played"
+    );
+    for r in rows {
+        println!(
+            "{:>4}  {:<width$}  {:>10.3}  {:>7.0}%  {:>10}  {:>6}",
+            r.rank,
+            r.name,
+            r.mean_score,
+            r.finish_rate * 100.0,
+            r.mean_ratio.map_or("-".to_string(), |x| format!("{x:.3}")),
+            r.played
+        );
+    }
+}

@@ -1,0 +1,193 @@
+//! `bot.toml`: how a bot folder says what its bots are and how to run them.
+//!
+//! ```toml
+//! name = "simple-python"          # unique name
+//! language = "python"             # for people
+//! command = "python3 simple_bot.py"
+//! build = "cargo build --release" # optional, run once in the folder before playing
+//! ```
+//! A folder with several bots lists them as `[[bot]]` tables with the same keys.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+/// The manifest's file name.
+pub const MANIFEST_FILE: &str = "bot.toml";
+
+/// One bot of a manifest.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BotManifest {
+    /// Unique name.
+    pub name: String,
+    /// Language, for people.
+    #[serde(default)]
+    pub language: Option<String>,
+    /// Command line run in the bot's folder.
+    pub command: String,
+    /// Build command run in the folder before playing.
+    #[serde(default)]
+    pub build: Option<String>,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// The folder (where the manifest is); filled in when loading.
+    #[serde(skip)]
+    pub dir: PathBuf,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum ManifestFile {
+    Many { bot: Vec<BotManifest> },
+    One(BotManifest),
+}
+
+/// Why a manifest could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    /// The file cannot be read.
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file is not a valid manifest.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// Nothing found.
+    #[error("no {MANIFEST_FILE} found in {0}")]
+    NotFound(PathBuf),
+}
+
+/// Parses manifest text; `dir` is the folder the bots run in.
+///
+/// # Errors
+/// A message naming what is wrong.
+pub fn parse(text: &str, dir: &Path, path: &Path) -> Result<Vec<BotManifest>, ManifestError> {
+    let invalid = |message: String| ManifestError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    };
+    let file: ManifestFile = toml::from_str(text).map_err(|e| {
+        invalid(format!(
+            "not a valid manifest (want `name` and `command`, or [[bot]] tables): {e}"
+        ))
+    })?;
+    let mut bots = match file {
+        ManifestFile::Many { bot } => bot,
+        ManifestFile::One(b) => vec![b],
+    };
+    if bots.is_empty() {
+        return Err(invalid("the manifest lists no bot".into()));
+    }
+    for b in &mut bots {
+        if b.name.trim().is_empty() || b.command.trim().is_empty() {
+            return Err(invalid(
+                "every bot needs a non-empty `name` and `command`".into(),
+            ));
+        }
+        b.dir = dir.to_path_buf();
+    }
+    Ok(bots)
+}
+
+/// Loads the bots of a manifest file, of a folder holding `bot.toml`, or of every
+/// `bot.toml` found below a folder (three levels deep at most).
+///
+/// # Errors
+/// An unreadable or invalid manifest, or none found.
+pub fn load(path: &Path) -> Result<Vec<BotManifest>, ManifestError> {
+    let read = |file: &Path| -> Result<Vec<BotManifest>, ManifestError> {
+        let text = std::fs::read_to_string(file).map_err(|source| ManifestError::Read {
+            path: file.to_path_buf(),
+            source,
+        })?;
+        let dir = file.parent().unwrap_or(Path::new("."));
+        let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+        parse(&text, &dir, file)
+    };
+    if path.is_file() {
+        return read(path);
+    }
+    let mut found = Vec::new();
+    collect(path, 0, &mut found);
+    found.sort();
+    if found.is_empty() {
+        return Err(ManifestError::NotFound(path.to_path_buf()));
+    }
+    let mut bots = Vec::new();
+    for file in found {
+        bots.extend(read(&file)?);
+    }
+    Ok(bots)
+}
+
+fn collect(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) {
+    let manifest = dir.join(MANIFEST_FILE);
+    if manifest.is_file() {
+        out.push(manifest);
+        return;
+    }
+    if depth >= 3 {
+        return;
+    }
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            let p = e.path();
+            let hidden = e.file_name().to_string_lossy().starts_with('.');
+            let skip = ["target", "node_modules", "__pycache__"]
+                .iter()
+                .any(|s| e.file_name() == *s);
+            if p.is_dir() && !hidden && !skip {
+                collect(&p, depth + 1, out);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_bot_or_many() {
+        let one = parse(
+            "name = \"a\"\ncommand = \"python3 a.py\"\n",
+            Path::new("/b"),
+            Path::new("x"),
+        )
+        .unwrap();
+        assert_eq!(one.len(), 1);
+        assert_eq!(one[0].dir, Path::new("/b"));
+        let many = parse(
+            "[[bot]]\nname = \"a\"\ncommand = \"x\"\n[[bot]]\nname = \"b\"\ncommand = \"y\"\nbuild = \"make\"\n",
+            Path::new("/b"),
+            Path::new("x"),
+        )
+        .unwrap();
+        assert_eq!(many.len(), 2);
+        assert_eq!(many[1].build.as_deref(), Some("make"));
+    }
+
+    #[test]
+    fn bad_manifests_say_why() {
+        for bad in [
+            "name = \"a\"\n",
+            "command = 1\n",
+            "name = \"\"\ncommand = \"x\"\n",
+            "[[bot]]\n",
+        ] {
+            let e = parse(bad, Path::new("/b"), Path::new("bot.toml")).unwrap_err();
+            assert!(e.to_string().starts_with("bot.toml: "), "{e}");
+        }
+    }
+}

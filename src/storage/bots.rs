@@ -1,0 +1,250 @@
+//! Bots and their versions.
+
+use sqlx::FromRow;
+
+use super::{Result, Storage, StorageError, is_unique_violation, now_ms};
+
+/// A bot with its latest version.
+#[derive(Debug, Clone, PartialEq, FromRow)]
+pub struct BotRow {
+    /// Id.
+    pub bot_id: i64,
+    /// Unique name.
+    pub name: String,
+    /// When it was registered (unix ms).
+    pub created_at: i64,
+    /// The latest version number.
+    pub version: i64,
+    /// The latest version's id.
+    pub bot_version_id: i64,
+    /// The latest version's command.
+    pub command: String,
+}
+
+/// One stored version of a bot.
+#[derive(Debug, Clone, PartialEq, FromRow)]
+pub struct BotVersionRow {
+    /// Id.
+    pub bot_version_id: i64,
+    /// The bot.
+    pub bot_id: i64,
+    /// 1, 2, ...
+    pub version: i64,
+    /// The command line.
+    pub command: String,
+    /// Where its files are.
+    pub dir: String,
+    /// Content hash of the files.
+    pub files_sha256: String,
+    /// Number of files.
+    pub file_count: i64,
+    /// When it was stored (unix ms).
+    pub created_at: i64,
+}
+
+/// A new version's details.
+#[derive(Debug, Clone)]
+pub struct NewVersion<'a> {
+    /// The command line.
+    pub command: &'a str,
+    /// Where its files are (absolute).
+    pub dir: &'a str,
+    /// Content hash of the files.
+    pub files_sha256: &'a str,
+    /// Number of files.
+    pub file_count: i64,
+}
+
+const BOT_WITH_LATEST: &str =
+    "select b.bot_id, b.name, b.created_at, v.version, v.bot_version_id, v.command
+     from bot b join bot_version v on v.bot_id = b.bot_id
+     where v.version = (select max(version) from bot_version where bot_id = b.bot_id)";
+
+impl Storage {
+    /// Registers a bot with its first version, in one transaction.
+    ///
+    /// # Errors
+    /// [`StorageError::Conflict`] when the name is taken.
+    pub async fn create_bot(
+        &self,
+        name: &str,
+        owner_token_hash: &str,
+        first: &NewVersion<'_>,
+    ) -> Result<BotVersionRow> {
+        let mut tx = self.pool().begin().await?;
+        let now = now_ms();
+        let bot_id: i64 = sqlx::query_scalar(
+            "insert into bot (name, owner_token_hash, created_at) values (?, ?, ?) returning bot_id",
+        )
+        .bind(name)
+        .bind(owner_token_hash)
+        .bind(now)
+        .fetch_one(&mut *tx)
+        .await
+        .map_err(|e| {
+            if is_unique_violation(&e) {
+                StorageError::Conflict(format!("a bot named {name:?} exists already"))
+            } else {
+                e.into()
+            }
+        })?;
+        let row = insert_version(&mut tx, bot_id, first).await?;
+        tx.commit().await?;
+        Ok(row)
+    }
+
+    /// Adds a new version to a bot.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn add_bot_version(
+        &self,
+        bot_id: i64,
+        new: &NewVersion<'_>,
+    ) -> Result<BotVersionRow> {
+        let mut tx = self.pool().begin().await?;
+        let row = insert_version(&mut tx, bot_id, new).await?;
+        tx.commit().await?;
+        Ok(row)
+    }
+
+    /// A bot and its latest version.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_bot(&self, bot_id: i64) -> Result<Option<BotRow>> {
+        Ok(
+            sqlx::query_as(&format!("{BOT_WITH_LATEST} and b.bot_id = ?"))
+                .bind(bot_id)
+                .fetch_optional(self.pool())
+                .await?,
+        )
+    }
+
+    /// A bot by name.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_bot_by_name(&self, name: &str) -> Result<Option<BotRow>> {
+        Ok(sqlx::query_as(&format!("{BOT_WITH_LATEST} and b.name = ?"))
+            .bind(name)
+            .fetch_optional(self.pool())
+            .await?)
+    }
+
+    /// Every bot with its latest version, by id.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn list_bots(&self) -> Result<Vec<BotRow>> {
+        Ok(
+            sqlx::query_as(&format!("{BOT_WITH_LATEST} order by b.bot_id"))
+                .fetch_all(self.pool())
+                .await?,
+        )
+    }
+
+    /// Every version of a bot, oldest first.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn bot_versions(&self, bot_id: i64) -> Result<Vec<BotVersionRow>> {
+        Ok(
+            sqlx::query_as("select * from bot_version where bot_id = ? order by version")
+                .bind(bot_id)
+                .fetch_all(self.pool())
+                .await?,
+        )
+    }
+
+    /// One version by id.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_bot_version(&self, bot_version_id: i64) -> Result<Option<BotVersionRow>> {
+        Ok(
+            sqlx::query_as("select * from bot_version where bot_version_id = ?")
+                .bind(bot_version_id)
+                .fetch_optional(self.pool())
+                .await?,
+        )
+    }
+
+    /// Whether `token_hash` is the owner token hash of `bot_id`.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn is_bot_owner(&self, bot_id: i64, token_hash: &str) -> Result<bool> {
+        let found: Option<i64> =
+            sqlx::query_scalar("select bot_id from bot where bot_id = ? and owner_token_hash = ?")
+                .bind(bot_id)
+                .bind(token_hash)
+                .fetch_optional(self.pool())
+                .await?;
+        Ok(found.is_some())
+    }
+}
+
+async fn insert_version(
+    tx: &mut sqlx::SqliteConnection,
+    bot_id: i64,
+    new: &NewVersion<'_>,
+) -> Result<BotVersionRow> {
+    Ok(sqlx::query_as(
+        "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at)
+         values (?, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = ?), ?, ?, ?, ?, ?)
+         returning *",
+    )
+    .bind(bot_id)
+    .bind(bot_id)
+    .bind(new.command)
+    .bind(new.dir)
+    .bind(new.files_sha256)
+    .bind(new.file_count)
+    .bind(now_ms())
+    .fetch_one(tx)
+    .await?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::storage::test_support::fresh;
+
+    fn version<'a>(command: &'a str) -> NewVersion<'a> {
+        NewVersion {
+            command,
+            dir: "/bots/x",
+            files_sha256: "abc",
+            file_count: 1,
+        }
+    }
+
+    #[tokio::test]
+    async fn bots_get_versions_and_owners() {
+        let (db, _dir) = fresh().await;
+        let v1 = db
+            .create_bot("alpha", "h1", &version("python3 a.py"))
+            .await
+            .unwrap();
+        assert_eq!(v1.version, 1);
+        let v2 = db
+            .add_bot_version(v1.bot_id, &version("python3 b.py"))
+            .await
+            .unwrap();
+        assert_eq!(v2.version, 2);
+        let bot = db.get_bot(v1.bot_id).await.unwrap().unwrap();
+        assert_eq!((bot.version, bot.command.as_str()), (2, "python3 b.py"));
+        assert_eq!(db.bot_versions(v1.bot_id).await.unwrap().len(), 2);
+        assert!(db.is_bot_owner(v1.bot_id, "h1").await.unwrap());
+        assert!(!db.is_bot_owner(v1.bot_id, "h2").await.unwrap());
+        assert_eq!(
+            db.get_bot_by_name("alpha").await.unwrap().unwrap().bot_id,
+            v1.bot_id
+        );
+        assert!(db.get_bot(999).await.unwrap().is_none());
+        let clash = db.create_bot("alpha", "h3", &version("x")).await;
+        assert!(matches!(clash, Err(StorageError::Conflict(_))));
+        assert_eq!(db.list_bots().await.unwrap().len(), 1);
+    }
+}

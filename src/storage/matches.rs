@@ -1,0 +1,471 @@
+//! The match queue: matches are rows; workers claim them with a lease, and write the
+//! record in one transaction only while they still hold the lease.
+
+use sqlx::FromRow;
+
+use super::{Result, Storage, now_ms};
+use crate::runner::MatchRecord;
+
+/// Priority of single matches: they run before tournament matches.
+pub const PRIORITY_SINGLE: i64 = 0;
+/// Priority of tournament matches.
+pub const PRIORITY_TOURNAMENT: i64 = 1;
+
+/// A stored match (without its trace).
+#[derive(Debug, Clone, PartialEq, FromRow)]
+pub struct MatchRow {
+    /// Id.
+    pub match_id: i64,
+    /// The bot version that plays.
+    pub bot_version_id: i64,
+    /// Its bot.
+    pub bot_id: i64,
+    /// The bot version's number.
+    pub version: i64,
+    /// The maze.
+    pub maze_id: i64,
+    /// Whether the maze is hidden.
+    pub maze_hidden: bool,
+    /// The seed sent to the bot.
+    pub seed: i64,
+    /// The tournament, if any.
+    pub tournament_id: Option<i64>,
+    /// Repetition index within the tournament.
+    pub repeat: Option<i64>,
+    /// queued, running, or a final status.
+    pub status: String,
+    /// How many times a worker started it.
+    pub attempts: i64,
+    /// Score when finished.
+    pub score: Option<f64>,
+    /// Run-0 steps.
+    pub run0_steps: Option<i64>,
+    /// Run-1 steps.
+    pub run1_steps: Option<i64>,
+    /// The step counter at the end.
+    pub total_steps: Option<i64>,
+    /// The record without its trace (JSON), once played.
+    pub record: Option<String>,
+    /// Queued at (unix ms).
+    pub created_at: i64,
+    /// Last started at (unix ms).
+    pub started_at: Option<i64>,
+    /// Finished at (unix ms).
+    pub finished_at: Option<i64>,
+}
+
+/// A match a worker has claimed, with what it needs to play it.
+#[derive(Debug, Clone, PartialEq, FromRow)]
+pub struct ClaimedMatch {
+    /// Id.
+    pub match_id: i64,
+    /// The seed.
+    pub seed: i64,
+    /// The bot's command.
+    pub command: String,
+    /// The bot's directory.
+    pub dir: String,
+    /// The maze's canonical numeric text.
+    pub layout: String,
+    /// The tournament, if any.
+    pub tournament_id: Option<i64>,
+}
+
+const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, v.version, m.maze_id,
+        z.hidden as maze_hidden, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.score,
+        m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at
+     from match m join bot_version v on v.bot_version_id = m.bot_version_id
+     join maze z on z.maze_id = m.maze_id";
+
+impl Storage {
+    /// Queues a single match.
+    ///
+    /// # Errors
+    /// Database failures (including unknown bot version or maze ids).
+    pub async fn queue_match(&self, bot_version_id: i64, maze_id: i64, seed: i64) -> Result<i64> {
+        Ok(sqlx::query_scalar(
+            "insert into match (bot_version_id, maze_id, seed, priority, created_at)
+             values (?, ?, ?, ?, ?) returning match_id",
+        )
+        .bind(bot_version_id)
+        .bind(maze_id)
+        .bind(seed)
+        .bind(PRIORITY_SINGLE)
+        .bind(now_ms())
+        .fetch_one(self.pool())
+        .await?)
+    }
+
+    /// The number of matches waiting to be played.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn queued_count(&self) -> Result<i64> {
+        Ok(
+            sqlx::query_scalar("select count(*) from match where status = 'queued'")
+                .fetch_one(self.pool())
+                .await?,
+        )
+    }
+
+    /// Claims the next queued match (single matches first, then by id) for `owner` until
+    /// `now + lease_ms`, in one statement. With `tournament`, only that tournament's.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn claim_next(
+        &self,
+        owner: &str,
+        lease_ms: i64,
+        tournament: Option<i64>,
+    ) -> Result<Option<ClaimedMatch>> {
+        let now = now_ms();
+        let id: Option<i64> = sqlx::query_scalar(
+            "update match set status = 'running', lease_owner = ?, lease_expires_at = ?,
+                 attempts = attempts + 1, started_at = ?
+             where match_id = (
+                 select match_id from match
+                 where status = 'queued' and (? is null or tournament_id = ?)
+                 order by priority, match_id limit 1)
+             returning match_id",
+        )
+        .bind(owner)
+        .bind(now + lease_ms)
+        .bind(now)
+        .bind(tournament)
+        .bind(tournament)
+        .fetch_optional(self.pool())
+        .await?;
+        let Some(id) = id else { return Ok(None) };
+        Ok(sqlx::query_as(
+            "select m.match_id, m.seed, v.command, v.dir, z.layout, m.tournament_id
+             from match m join bot_version v on v.bot_version_id = m.bot_version_id
+             join maze z on z.maze_id = m.maze_id where m.match_id = ?",
+        )
+        .bind(id)
+        .fetch_optional(self.pool())
+        .await?)
+    }
+
+    /// Extends `owner`'s lease on a running match. Returns false if the lease was lost.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn renew_lease(&self, match_id: i64, owner: &str, lease_ms: i64) -> Result<bool> {
+        let done = sqlx::query(
+            "update match set lease_expires_at = ?
+             where match_id = ? and lease_owner = ? and status = 'running'",
+        )
+        .bind(now_ms() + lease_ms)
+        .bind(match_id)
+        .bind(owner)
+        .execute(self.pool())
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Writes a played match's record, in one transaction, if `owner` still holds it.
+    /// Returns false (and writes nothing) when the lease was lost meanwhile.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn complete_match(
+        &self,
+        match_id: i64,
+        owner: &str,
+        record: &MatchRecord,
+    ) -> Result<bool> {
+        let summary = serde_json::to_string(&record.summary()).unwrap_or_default();
+        let trace = serde_json::to_string(&record.trace).unwrap_or_default();
+        let mut tx = self.pool().begin().await?;
+        let done = sqlx::query(
+            "update match set status = ?, score = ?, run0_steps = ?, run1_steps = ?, total_steps = ?,
+                 record = ?, trace = ?, finished_at = ?, lease_owner = null, lease_expires_at = null
+             where match_id = ? and lease_owner = ? and status = 'running'",
+        )
+        .bind(record.status.as_str())
+        .bind(record.score)
+        .bind(record.run0_steps.map(i64::from))
+        .bind(record.run1_steps.map(i64::from))
+        .bind(i64::from(record.total_steps))
+        .bind(summary)
+        .bind(trace)
+        .bind(now_ms())
+        .bind(match_id)
+        .bind(owner)
+        .execute(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Marks a match `owner` holds as crashed without a bot record (our own fault,
+    /// e.g. a stored maze that no longer parses), so it is not retried forever.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn fail_match(&self, match_id: i64, owner: &str, reason: &str) -> Result<bool> {
+        let record =
+            serde_json::json!({ "status": "crashed", "error": { "reason": reason } }).to_string();
+        let done = sqlx::query(
+            "update match set status = 'crashed', record = ?, finished_at = ?,
+                 lease_owner = null, lease_expires_at = null
+             where match_id = ? and lease_owner = ? and status = 'running'",
+        )
+        .bind(record)
+        .bind(now_ms())
+        .bind(match_id)
+        .bind(owner)
+        .execute(self.pool())
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Puts a match `owner` holds back in the queue (a worker that stops before the end).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn release_match(&self, match_id: i64, owner: &str) -> Result<bool> {
+        let done = sqlx::query(
+            "update match set status = 'queued', lease_owner = null, lease_expires_at = null
+             where match_id = ? and lease_owner = ? and status = 'running'",
+        )
+        .bind(match_id)
+        .bind(owner)
+        .execute(self.pool())
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Puts every running match whose lease has expired back in the queue (their worker
+    /// died). Returns how many.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn requeue_expired(&self) -> Result<u64> {
+        let done = sqlx::query(
+            "update match set status = 'queued', lease_owner = null, lease_expires_at = null
+             where status = 'running' and lease_expires_at < ?",
+        )
+        .bind(now_ms())
+        .execute(self.pool())
+        .await?;
+        Ok(done.rows_affected())
+    }
+
+    /// A match by id.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_match(&self, match_id: i64) -> Result<Option<MatchRow>> {
+        Ok(
+            sqlx::query_as(&format!("{MATCH_SELECT} where m.match_id = ?"))
+                .bind(match_id)
+                .fetch_optional(self.pool())
+                .await?,
+        )
+    }
+
+    /// The per-step trace of a played match (JSON array), if any.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_trace(&self, match_id: i64) -> Result<Option<String>> {
+        Ok(
+            sqlx::query_scalar::<_, Option<String>>("select trace from match where match_id = ?")
+                .bind(match_id)
+                .fetch_optional(self.pool())
+                .await?
+                .flatten(),
+        )
+    }
+
+    /// Matches of a tournament, by id.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn tournament_matches(&self, tournament_id: i64) -> Result<Vec<MatchRow>> {
+        Ok(sqlx::query_as(&format!(
+            "{MATCH_SELECT} where m.tournament_id = ? order by m.match_id"
+        ))
+        .bind(tournament_id)
+        .fetch_all(self.pool())
+        .await?)
+    }
+
+    /// The number of matches in each status.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn count_by_status(&self) -> Result<Vec<(String, i64)>> {
+        Ok(
+            sqlx::query_as("select status, count(*) from match group by status order by status")
+                .fetch_all(self.pool())
+                .await?,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::storage::bots::NewVersion;
+    use crate::storage::mazes::NewMaze;
+    use crate::storage::test_support::fresh;
+
+    async fn setup(db: &Storage) -> (i64, i64) {
+        let v = db
+            .create_bot(
+                "b",
+                "h",
+                &NewVersion {
+                    command: "python3 b.py",
+                    dir: "/x",
+                    files_sha256: "s",
+                    file_count: 1,
+                },
+            )
+            .await
+            .unwrap();
+        let z = db
+            .insert_maze(&NewMaze {
+                name: "m",
+                hash: "hash",
+                dim: 2,
+                layout: "2\n3,6\n9,12\n",
+                hidden: false,
+                optimum: Some(1),
+            })
+            .await
+            .unwrap();
+        (v.bot_version_id, z.maze_id)
+    }
+
+    fn record(status: crate::runner::MatchStatus) -> MatchRecord {
+        serde_json::from_value(serde_json::json!({
+            "engine_version": "t", "protocol": 1, "maze_hash": "hash", "maze_dim": 2, "seed": 1,
+            "limits": {"max_steps": 1000, "startup_timeout_ms": null, "move_timeout_ms": null, "memory_limit_mb": null},
+            "status": status, "score": 1.1, "run0_steps": 3, "run1_steps": 1, "total_steps": 4,
+            "warnings": [], "error": null, "stderr_tail": "", "timings": {"wall_ms": 1, "bot_cpu_ms": null, "max_answer_us": 1, "mean_answer_us": 1}
+        }))
+        .unwrap()
+    }
+
+    #[tokio::test]
+    async fn single_matches_are_claimed_before_tournament_matches() {
+        let (db, _dir) = fresh().await;
+        let (v, z) = setup(&db).await;
+        let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
+        assert_eq!((t.total, t.done), (2, 0));
+        let single = db.queue_match(v, z, 9).await.unwrap();
+        assert_eq!(db.queued_count().await.unwrap(), 3);
+        let first = db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
+        assert_eq!(first.match_id, single);
+        assert_eq!(first.seed, 9);
+        let second = db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
+        assert_eq!(second.tournament_id, Some(t.tournament_id));
+        // Only that tournament's matches when asked.
+        let third = db
+            .claim_next("w2", 60_000, Some(t.tournament_id + 1))
+            .await
+            .unwrap();
+        assert!(third.is_none());
+    }
+
+    #[tokio::test]
+    async fn a_record_is_written_once_and_only_by_the_lease_holder() {
+        let (db, _dir) = fresh().await;
+        let (v, z) = setup(&db).await;
+        let id = db.queue_match(v, z, 1).await.unwrap();
+        db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
+        let finished = crate::runner::MatchStatus::Finished;
+        assert!(
+            !db.complete_match(id, "w2", &record(finished))
+                .await
+                .unwrap()
+        );
+        assert!(
+            db.complete_match(id, "w1", &record(finished))
+                .await
+                .unwrap()
+        );
+        assert!(
+            !db.complete_match(id, "w1", &record(finished))
+                .await
+                .unwrap()
+        );
+        let row = db.get_match(id).await.unwrap().unwrap();
+        assert_eq!(row.status, "finished");
+        assert_eq!(row.score, Some(1.1));
+        assert_eq!(row.attempts, 1);
+        assert!(db.claim_next("w1", 60_000, None).await.unwrap().is_none());
+    }
+
+    #[tokio::test]
+    async fn expired_leases_go_back_to_the_queue() {
+        let (db, _dir) = fresh().await;
+        let (v, z) = setup(&db).await;
+        let id = db.queue_match(v, z, 1).await.unwrap();
+        db.claim_next("dead", -1, None).await.unwrap().unwrap();
+        assert!(!db.renew_lease(id, "other", 1000).await.unwrap());
+        assert_eq!(db.requeue_expired().await.unwrap(), 1);
+        let again = db.claim_next("w2", 60_000, None).await.unwrap().unwrap();
+        assert_eq!(again.match_id, id);
+        // The dead worker can no longer write.
+        let status = crate::runner::MatchStatus::Crashed;
+        assert!(
+            !db.complete_match(id, "dead", &record(status))
+                .await
+                .unwrap()
+        );
+        assert!(db.renew_lease(id, "w2", 1000).await.unwrap());
+        assert!(db.release_match(id, "w2").await.unwrap());
+        assert_eq!(db.get_match(id).await.unwrap().unwrap().attempts, 2);
+        assert_eq!(db.queued_count().await.unwrap(), 1);
+    }
+
+    #[tokio::test]
+    async fn the_leaderboard_counts_a_dnf_as_1000() {
+        let (db, _dir) = fresh().await;
+        let (v, z) = setup(&db).await;
+        let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
+        let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+        db.complete_match(
+            a.match_id,
+            "w",
+            &record(crate::runner::MatchStatus::Finished),
+        )
+        .await
+        .unwrap();
+        let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+        db.complete_match(
+            b.match_id,
+            "w",
+            &record(crate::runner::MatchStatus::Timeout),
+        )
+        .await
+        .unwrap();
+        use crate::storage::leaderboard::Scope;
+        let board = db
+            .leaderboard(Scope::Tournament(t.tournament_id))
+            .await
+            .unwrap();
+        assert_eq!(board.len(), 1);
+        let s = &board[0];
+        assert_eq!((s.rank, s.played, s.finished), (1, 2, 1));
+        assert!((s.mean_score - (1.1 + 1000.0) / 2.0).abs() < 1e-9);
+        assert!((s.finish_rate - 0.5).abs() < 1e-9);
+        assert!((s.mean_ratio.unwrap() - (1.1 + 1000.0) / 2.0).abs() < 1e-9);
+        // The maze is public: the ranking board is empty, the all-mazes board is not.
+        assert!(db.leaderboard(Scope::Ranking).await.unwrap().is_empty());
+        assert_eq!(db.leaderboard(Scope::All).await.unwrap().len(), 1);
+        assert_eq!(
+            db.get_tournament(t.tournament_id)
+                .await
+                .unwrap()
+                .unwrap()
+                .done,
+            2
+        );
+    }
+}

@@ -1,0 +1,91 @@
+//! Tournaments: every bot version on every maze, `repeats` times, queued at once.
+
+use sqlx::FromRow;
+
+use super::matches::PRIORITY_TOURNAMENT;
+use super::{Result, Storage, now_ms};
+
+/// A stored tournament with its progress.
+#[derive(Debug, Clone, PartialEq, FromRow)]
+pub struct TournamentRow {
+    /// Id.
+    pub tournament_id: i64,
+    /// Name.
+    pub name: String,
+    /// Repeats of each (bot, maze) pair.
+    pub repeats: i64,
+    /// Created at (unix ms).
+    pub created_at: i64,
+    /// Matches in all.
+    pub total: i64,
+    /// Matches played (any final status).
+    pub done: i64,
+}
+
+impl Storage {
+    /// Creates a tournament and queues all its matches, in one transaction. Repeat `r`
+    /// of every pair uses seed `r`, so every bot meets the same seeds.
+    ///
+    /// # Errors
+    /// Database failures (including unknown ids).
+    pub async fn create_tournament(
+        &self,
+        name: &str,
+        bot_version_ids: &[i64],
+        maze_ids: &[i64],
+        repeats: i64,
+    ) -> Result<TournamentRow> {
+        let mut tx = self.pool().begin().await?;
+        let now = now_ms();
+        let id: i64 = sqlx::query_scalar(
+            "insert into tournament (name, repeats, created_at) values (?, ?, ?) returning tournament_id",
+        )
+        .bind(name)
+        .bind(repeats)
+        .bind(now)
+        .fetch_one(&mut *tx)
+        .await?;
+        // Interleave bots so that partial progress is comparable across bots.
+        for repeat in 0..repeats {
+            for &maze_id in maze_ids {
+                for &bot_version_id in bot_version_ids {
+                    sqlx::query(
+                        "insert into match (bot_version_id, maze_id, seed, tournament_id, repeat, priority, created_at)
+                         values (?, ?, ?, ?, ?, ?, ?)",
+                    )
+                    .bind(bot_version_id)
+                    .bind(maze_id)
+                    .bind(repeat)
+                    .bind(id)
+                    .bind(repeat)
+                    .bind(PRIORITY_TOURNAMENT)
+                    .bind(now)
+                    .execute(&mut *tx)
+                    .await?;
+                }
+            }
+        }
+        tx.commit().await?;
+        Ok(self
+            .get_tournament(id)
+            .await?
+            .expect("the tournament was just created"))
+    }
+
+    /// A tournament with its progress.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_tournament(&self, tournament_id: i64) -> Result<Option<TournamentRow>> {
+        Ok(sqlx::query_as(
+            "select t.tournament_id, t.name, t.repeats, t.created_at,
+                 (select count(*) from match where tournament_id = t.tournament_id) as total,
+                 (select count(*) from match where tournament_id = t.tournament_id
+                     and status not in ('queued', 'running')) as done
+             from tournament t where t.tournament_id = ?",
+        )
+        .bind(tournament_id)
+        .fetch_optional(self.pool())
+        .await?)
+    }
+}

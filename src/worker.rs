@@ -1,0 +1,215 @@
+//! Match workers: a pool of tasks that claim queued matches from the database with a
+//! lease, play them with the runner, and write each record in one transaction.
+//!
+//! Used by the server and by `mazearena tournament`. A worker keeps its lease alive while
+//! a match runs; a match whose worker died goes back to the queue when its lease expires
+//! (the reaper), so nothing accepted is ever lost, and the lease check on writing makes
+//! sure nothing is recorded twice.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use tokio::sync::Notify;
+use tokio_util::sync::CancellationToken;
+use tokio_util::task::TaskTracker;
+
+use crate::engine::mazefile;
+use crate::metrics::Metrics;
+use crate::runner::{self, BotSpec, Limits, MatchStatus};
+use crate::storage::Storage;
+use crate::storage::matches::ClaimedMatch;
+
+/// Default lease on a running match; renewed every third of it.
+pub const DEFAULT_LEASE: Duration = Duration::from_secs(30);
+
+/// How often an idle worker looks at the queue even without being woken.
+pub const IDLE_POLL: Duration = Duration::from_millis(500);
+
+/// The number of cores: the default and the maximum number of workers, so that each
+/// bot has a core to itself and timing is fair.
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// How the workers run.
+#[derive(Debug, Clone)]
+pub struct WorkerConfig {
+    /// Number of workers (at most one bot process per core).
+    pub jobs: usize,
+    /// Lease length on a running match.
+    pub lease: Duration,
+    /// Limits for every match.
+    pub limits: Limits,
+    /// Only claim this tournament's matches.
+    pub only_tournament: Option<i64>,
+    /// Stop when the queue is empty instead of waiting for more.
+    pub exit_when_idle: bool,
+}
+
+/// Signals that stop the workers.
+#[derive(Debug, Clone, Default)]
+pub struct Shutdown {
+    /// Stop claiming new matches; running ones go on.
+    pub stop_claiming: CancellationToken,
+    /// Abandon running matches now (their bots are killed and the matches re-queued).
+    pub abort: CancellationToken,
+}
+
+/// A unique name for this process's leases.
+pub fn lease_owner_name() -> String {
+    let mut bytes = [0u8; 6];
+    let _ = getrandom::fill(&mut bytes);
+    let suffix: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
+    format!("{}-{}", std::process::id(), suffix)
+}
+
+/// Starts `config.jobs` workers and the lease reaper on `tracker`. `wake` is notified by
+/// whoever queues matches.
+pub fn spawn_workers(
+    tracker: &TaskTracker,
+    storage: Storage,
+    config: WorkerConfig,
+    metrics: Option<Metrics>,
+    wake: Arc<Notify>,
+    shutdown: Shutdown,
+    on_done: Option<Arc<dyn Fn(MatchStatus) + Send + Sync>>,
+) {
+    let owner: Arc<str> = lease_owner_name().into();
+    for _ in 0..config.jobs.max(1) {
+        let worker = Worker {
+            storage: storage.clone(),
+            config: config.clone(),
+            metrics: metrics.clone(),
+            wake: wake.clone(),
+            shutdown: shutdown.clone(),
+            owner: owner.clone(),
+            on_done: on_done.clone(),
+        };
+        tracker.spawn(worker.run());
+    }
+    let reaper_storage = storage;
+    let lease = config.lease;
+    let stop = shutdown.stop_claiming.clone();
+    tracker.spawn(async move {
+        let mut tick = tokio::time::interval((lease / 2).max(Duration::from_millis(200)));
+        loop {
+            tokio::select! {
+                _ = stop.cancelled() => break,
+                _ = tick.tick() => {}
+            }
+            match reaper_storage.requeue_expired().await {
+                Ok(0) => {}
+                Ok(n) => {
+                    tracing::warn!(count = n, "re-queued matches whose worker stopped");
+                    wake.notify_waiters();
+                }
+                Err(e) => tracing::error!(cause = %e, "could not re-queue expired leases"),
+            }
+        }
+    });
+}
+
+struct Worker {
+    storage: Storage,
+    config: WorkerConfig,
+    metrics: Option<Metrics>,
+    wake: Arc<Notify>,
+    shutdown: Shutdown,
+    owner: Arc<str>,
+    on_done: Option<Arc<dyn Fn(MatchStatus) + Send + Sync>>,
+}
+
+impl Worker {
+    async fn run(self) {
+        let lease_ms = self.config.lease.as_millis() as i64;
+        while !self.shutdown.stop_claiming.is_cancelled() {
+            // Register for a wake-up before looking, so a notification is not missed.
+            let woken = self.wake.notified();
+            match self
+                .storage
+                .claim_next(&self.owner, lease_ms, self.config.only_tournament)
+                .await
+            {
+                Ok(Some(job)) => self.play(job).await,
+                Ok(None) if self.config.exit_when_idle => break,
+                Ok(None) => {
+                    tokio::select! {
+                        _ = woken => {}
+                        _ = tokio::time::sleep(IDLE_POLL) => {}
+                        _ = self.shutdown.stop_claiming.cancelled() => {}
+                    }
+                }
+                Err(e) => {
+                    tracing::error!(cause = %e, "could not claim a match");
+                    tokio::time::sleep(Duration::from_secs(1)).await;
+                }
+            }
+        }
+    }
+
+    #[tracing::instrument(skip_all, fields(match_id = job.match_id))]
+    async fn play(&self, job: ClaimedMatch) {
+        let maze = match mazefile::numeric::parse(job.layout.as_bytes()) {
+            Ok(m) => m,
+            Err(e) => {
+                tracing::error!(cause = %e, "stored maze layout is invalid; match marked crashed");
+                let _ = self
+                    .storage
+                    .fail_match(
+                        job.match_id,
+                        &self.owner,
+                        &format!("stored maze is invalid: {e}"),
+                    )
+                    .await;
+                return;
+            }
+        };
+        let bot = BotSpec {
+            command: job.command.clone(),
+            dir: PathBuf::from(&job.dir),
+        };
+        let started = Instant::now();
+        let lease_ms = self.config.lease.as_millis() as i64;
+        let mut renew = tokio::time::interval(self.config.lease / 3);
+        renew.tick().await; // the first tick is immediate
+        let game = runner::run_match(&bot, &maze, job.seed as u64, self.config.limits, |_| {});
+        tokio::pin!(game);
+        loop {
+            tokio::select! {
+                record = &mut game => {
+                    match self.storage.complete_match(job.match_id, &self.owner, &record).await {
+                        Ok(true) => {
+                            if let Some(m) = &self.metrics {
+                                m.observe_match(started.elapsed());
+                            }
+                            if let Some(f) = &self.on_done {
+                                f(record.status);
+                            }
+                        }
+                        Ok(false) => tracing::warn!("lease lost before the record was written; another worker has the match"),
+                        Err(e) => tracing::error!(cause = %e, "could not write the match record; it will be re-queued"),
+                    }
+                    return;
+                }
+                _ = renew.tick() => {
+                    match self.storage.renew_lease(job.match_id, &self.owner, lease_ms).await {
+                        Ok(true) => {}
+                        Ok(false) => {
+                            tracing::warn!("lease lost while playing; abandoning the match");
+                            return;
+                        }
+                        Err(e) => tracing::error!(cause = %e, "could not renew the lease"),
+                    }
+                }
+                _ = self.shutdown.abort.cancelled() => {
+                    // Dropping the match future kills the bot's process group.
+                    if let Err(e) = self.storage.release_match(job.match_id, &self.owner).await {
+                        tracing::error!(cause = %e, "could not re-queue an interrupted match; its lease will expire");
+                    }
+                    return;
+                }
+            }
+        }
+    }
+}
