@@ -16,8 +16,9 @@
 //!   (`C:`), are not UTF-8, or are too long ([`MAX_PATH_BYTES`],
 //!   [`MAX_NAME_BYTES`]); `.` components and repeated `/` are ignored;
 //! - symbolic links with an absolute target, or whose target, resolved through
-//!   the other links of the bundle, would leave the bot's directory; relative
-//!   links that stay inside are created as symbolic links;
+//!   the other links of the bundle, would leave the bot's directory (a chain
+//!   of more than 40 links, or a loop, is refused the same way); relative
+//!   links that stay inside, even dangling ones, are created as symbolic links;
 //! - hard links (tar only) whose target is not a regular file stored earlier
 //!   in the same archive; an accepted hard link is stored as a *copy* of its
 //!   target (it counts towards the size limit like any file);
@@ -35,6 +36,10 @@
 //! - an archive or map without any regular file ("the bot has no files");
 //! - bytes that are not a recognised archive, corrupt and truncated archives,
 //!   encrypted zip entries and unsupported zip compression methods.
+//!
+//! An empty `.tar` (only end-of-archive blocks) and an empty `.zip` are
+//! recognised, and refused as having no files. Archive-wide pax headers (as
+//! written by `git archive`) and a `./` root entry are ignored.
 //!
 //! Directories are created with mode `0o755`, files with `0o755` if the entry
 //! had any executable bit set and `0o644` otherwise (so compiled bots stay
@@ -57,6 +62,9 @@
 //! every entry is checked against what the bundle already holds (so nothing is
 //! ever written below a file or a link), and the symbolic links are only
 //! created at the very end, after all of them have been checked together.
+//!
+//! Both functions do blocking file I/O and CPU work (decompression, hashing):
+//! call them from `tokio::task::spawn_blocking`, not on an async worker thread.
 //!
 //! # The content hash
 //!
@@ -531,14 +539,18 @@ fn read_tar<R: Read>(reader: R, format: Format, bundle: &mut Bundle) -> Result<(
                 }
             };
             let (path, trailing_slash) = parse_path(&name)?;
-            let link = match entry.link_name_bytes() {
-                Some(bytes) => Some(String::from_utf8(bytes.into_owned()).map_err(|_| {
-                    BundleError::InvalidName {
+            // A link's target; only read for link entries.
+            let link = |entry: &tar::Entry<'_, _>| -> Result<String, BundleError> {
+                let bytes = entry
+                    .link_name_bytes()
+                    .ok_or_else(|| BundleError::InvalidName {
                         path: name.clone(),
-                        reason: "its link target is not valid UTF-8".to_owned(),
-                    }
-                })?),
-                None => None,
+                        reason: "it is a link with an empty target".to_owned(),
+                    })?;
+                String::from_utf8(bytes.into_owned()).map_err(|_| BundleError::InvalidName {
+                    path: name.clone(),
+                    reason: "its link target is not valid UTF-8".to_owned(),
+                })
             };
 
             let regular = entry_type.is_file() || entry_type.is_contiguous();
@@ -558,16 +570,10 @@ fn read_tar<R: Read>(reader: R, format: Format, bundle: &mut Bundle) -> Result<(
                     fail(e, Some(n))
                 })?;
             } else if entry_type.is_symlink() {
-                let target = link.ok_or_else(|| BundleError::Corrupt {
-                    format: format.name(),
-                    detail: format!("symbolic link {name:?} has no target"),
-                })?;
+                let target = link(&entry)?;
                 bundle.add_symlink(&name, &path, &target)?;
             } else if entry_type.is_hard_link() {
-                let target = link.ok_or_else(|| BundleError::Corrupt {
-                    format: format.name(),
-                    detail: format!("hard link {name:?} has no target"),
-                })?;
+                let target = link(&entry)?;
                 bundle.add_hard_link(&name, &path, &target)?;
             } else if entry_type.is_character_special() || entry_type.is_block_special() {
                 return Err(special(&name, "a device file"));
@@ -1280,9 +1286,10 @@ impl Staging {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
-        let base = dest
+        // Keep the staging name well under the 255-byte limit of a name.
+        let base: String = dest
             .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
+            .map(|n| n.to_string_lossy().chars().take(64).collect())
             .unwrap_or_default();
         let mut attempts = 0;
         loop {
@@ -1403,6 +1410,9 @@ mod tests {
         h.set_size(size);
         h.set_mode(mode);
         h.set_mtime(1_700_000_000);
+        if kind == EntryType::GNUSparse {
+            h.as_gnu_mut().unwrap().set_real_size(size);
+        }
         h.set_cksum();
         h
     }
@@ -1961,10 +1971,7 @@ mod tests {
             &small(),
         );
         assert!(
-            matches!(
-                err,
-                BundleError::Unsupported { .. } | BundleError::Corrupt { .. }
-            ),
+            matches!(err, BundleError::Unsupported { ref feature, .. } if feature == "a sparse file"),
             "{err:?}"
         );
 

@@ -269,6 +269,18 @@ struct Upload {
 }
 
 async fn read_upload(state: &AppState, request: Request) -> ApiResult<Upload> {
+    // Refuse a declared oversized upload before reading any of it.
+    let declared = request
+        .headers()
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<u64>().ok());
+    if declared.is_some_and(|n| n > MAX_UPLOAD_BYTES as u64) {
+        return Err(ApiError::PayloadTooLarge(format!(
+            "the upload is larger than {MAX_UPLOAD_BYTES} bytes; bots are limited to 50 MiB unpacked \
+             and uploads to {MAX_UPLOAD_BYTES} bytes"
+        )));
+    }
     let content_type = request
         .headers()
         .get(header::CONTENT_TYPE)
@@ -389,7 +401,12 @@ async fn store_files(
 }
 
 fn bundle_error(e: BundleError) -> ApiError {
-    if e.is_client_error() {
+    if matches!(
+        e,
+        BundleError::TooLarge { .. } | BundleError::TooManyFiles { .. }
+    ) {
+        ApiError::PayloadTooLarge(e.to_string())
+    } else if e.is_client_error() {
         ApiError::Unprocessable(e.to_string())
     } else {
         ApiError::Internal(e.to_string())

@@ -466,3 +466,88 @@ fn the_shipped_mazes_are_valid_task_mazes() {
         "mazes/ should hold a few mazes of each size, found {count}"
     );
 }
+
+#[tokio::test]
+async fn a_local_tournament_writes_every_match_and_prints_standings() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two manifests: the shipped Python folder, and the adapter with the fixture robot.
+    let adapter_dir = dir.path().join("adapter");
+    std::fs::create_dir(&adapter_dir).unwrap();
+    let robot = root().join("tests/fixtures/robot_py/robot.py");
+    let adapter = root().join("bots/python/udacity_adapter.py");
+    std::fs::write(
+        adapter_dir.join("bot.toml"),
+        format!(
+            "name = \"robot-py\"\nlanguage = \"python\"\ncommand = \"python3 {} {}\"\n",
+            adapter.display(),
+            robot.display()
+        ),
+    )
+    .unwrap();
+    let db = format!("sqlite://{}", dir.path().join("t.db").display());
+    let out = mazearena(&[
+        "tournament",
+        "--bots",
+        "bots/python",
+        adapter_dir.to_str().unwrap(),
+        "--mazes",
+        shared_maze("classic").to_str().unwrap(),
+        "--repeats",
+        "2",
+        "--jobs",
+        "2",
+        "--database",
+        &db,
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["total"], 12);
+    assert_eq!(v["done"], 12);
+    let standings = v["standings"].as_array().unwrap();
+    assert_eq!(standings.len(), 2);
+    assert!(standings[0]["mean_score"].as_f64() <= standings[1]["mean_score"].as_f64());
+    // The records are in the database, one per (bot, maze, repeat).
+    let storage = mazearena::storage::Storage::open(&db).await.unwrap();
+    let id = v["tournament_id"].as_i64().unwrap();
+    let rows = storage.tournament_matches(id).await.unwrap();
+    assert_eq!(rows.len(), 12);
+    assert!(rows.iter().all(|r| r.status == "finished"), "{rows:?}");
+    // A second run reuses the registered bots and mazes (no new versions).
+    let again = mazearena(&[
+        "tournament",
+        "--bots",
+        "bots/python",
+        "--mazes",
+        shared_maze("classic/test_maze_01.txt").to_str().unwrap(),
+        "--database",
+        &db,
+        "--json",
+    ]);
+    assert!(again.status.success());
+    let bots = storage.list_bots().await.unwrap();
+    assert_eq!(bots.len(), 2);
+    assert!(bots.iter().all(|b| b.version == 1));
+    assert_eq!(storage.count_mazes().await.unwrap(), 3);
+}
+
+#[test]
+fn tournament_refuses_a_bad_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bot.toml"), "name = \"x\"\n").unwrap();
+    let out = mazearena(&[
+        "tournament",
+        "--bots",
+        dir.path().to_str().unwrap(),
+        "--mazes",
+        "mazes",
+        "--database",
+        &format!("sqlite://{}", dir.path().join("t.db").display()),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bot.toml"));
+}

@@ -74,3 +74,138 @@ pub fn live_group_members(pgid: u32) -> Vec<u32> {
     }
     found
 }
+
+/// The admin token the test servers use.
+pub const ADMIN: &str = "test-admin-token";
+
+/// A real `mazearena serve` process on a free port with its own database and data folder.
+pub struct TestServer {
+    /// `http://127.0.0.1:PORT`.
+    pub base: String,
+    /// The database URL.
+    pub database: String,
+    child: std::process::Child,
+    client: reqwest::Client,
+}
+
+impl TestServer {
+    /// Starts the server binary in `dir` (database and bot files inside it).
+    pub fn start(dir: &Path, extra: &[&str]) -> TestServer {
+        use std::io::BufRead;
+        let database = format!("sqlite://{}", dir.join("mazearena.db").display());
+        let mut child = Command::new(env!("CARGO_BIN_EXE_mazearena"))
+            .arg("serve")
+            .args(["--bind", "127.0.0.1:0", "--database", &database])
+            .arg("--data-dir")
+            .arg(dir.join("data"))
+            .args(extra)
+            .env("MAZEARENA_ADMIN_TOKEN", ADMIN)
+            .current_dir(root())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("the server starts");
+        let stdout = child.stdout.take().unwrap();
+        let mut line = String::new();
+        std::io::BufReader::new(stdout)
+            .read_line(&mut line)
+            .unwrap();
+        let addr = line
+            .split("http://")
+            .nth(1)
+            .and_then(|rest| rest.split_whitespace().next())
+            .unwrap_or_else(|| panic!("no address in {line:?}"))
+            .to_string();
+        TestServer {
+            base: format!("http://{addr}"),
+            database,
+            child,
+            client: reqwest::Client::new(),
+        }
+    }
+
+    /// Sends a request; returns the status, the JSON body (Null if none) and the headers.
+    pub async fn call(
+        &self,
+        method: reqwest::Method,
+        path: &str,
+        body: Option<serde_json::Value>,
+        token: Option<&str>,
+    ) -> (u16, serde_json::Value, reqwest::header::HeaderMap) {
+        let mut req = self.client.request(method, format!("{}{path}", self.base));
+        if let Some(b) = body {
+            req = req.json(&b);
+        }
+        if let Some(t) = token {
+            req = req.bearer_auth(t);
+        }
+        let resp = req.send().await.expect("the server answers");
+        let status = resp.status().as_u16();
+        let headers = resp.headers().clone();
+        let text = resp.text().await.unwrap();
+        let json = serde_json::from_str(&text).unwrap_or(serde_json::Value::Null);
+        (status, json, headers)
+    }
+
+    /// GET returning status and JSON.
+    pub async fn get(&self, path: &str, token: Option<&str>) -> (u16, serde_json::Value) {
+        let (s, v, _) = self.call(reqwest::Method::GET, path, None, token).await;
+        (s, v)
+    }
+
+    /// POST JSON returning status and JSON.
+    pub async fn post(
+        &self,
+        path: &str,
+        body: serde_json::Value,
+        token: Option<&str>,
+    ) -> (u16, serde_json::Value) {
+        let (s, v, _) = self
+            .call(reqwest::Method::POST, path, Some(body), token)
+            .await;
+        (s, v)
+    }
+
+    /// The raw client, for unusual requests.
+    pub fn client(&self) -> &reqwest::Client {
+        &self.client
+    }
+
+    /// Kills the server with SIGKILL, as a crash would.
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// Sends SIGTERM and waits for the process to exit.
+    pub fn terminate(&mut self) -> std::process::ExitStatus {
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        self.child.wait().unwrap()
+    }
+}
+
+impl Drop for TestServer {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+/// The files of the shipped simple Python bot, as a JSON map for upload.
+pub fn simple_bot_files() -> serde_json::Value {
+    let read = |p: &str| std::fs::read_to_string(root().join(p)).unwrap();
+    serde_json::json!({
+        "mazebot.py": read("bots/python/mazebot.py"),
+        "simple_bot.py": read("bots/python/simple_bot.py"),
+    })
+}
+
+/// The adapter and the fixture robot.py, as a JSON map for upload.
+pub fn adapter_bot_files() -> serde_json::Value {
+    let read = |p: &str| std::fs::read_to_string(root().join(p)).unwrap();
+    serde_json::json!({
+        "udacity_adapter.py": read("bots/python/udacity_adapter.py"),
+        "robot.py": read("tests/fixtures/robot_py/robot.py"),
+    })
+}

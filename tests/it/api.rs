@@ -1,0 +1,904 @@
+//! The real server binary over HTTP: bots, mazes, matches, tournaments, leaderboards,
+//! authorization, bad requests, restart recovery.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::{Duration, Instant};
+
+use reqwest::Method;
+use serde_json::{Value, json};
+
+use crate::support::{
+    ADMIN, TestServer, adapter_bot_files, mazearena, root, shared_maze, simple_bot_files,
+};
+
+const FINAL: &[&str] = &[
+    "finished",
+    "step_limit",
+    "timeout",
+    "crashed",
+    "protocol_error",
+];
+
+async fn register(server: &TestServer, name: &str, command: &str, files: Value) -> (i64, String) {
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": name, "command": command, "files": files}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    (
+        v["bot_id"].as_i64().unwrap(),
+        v["owner_token"].as_str().unwrap().to_string(),
+    )
+}
+
+async fn upload_maze(server: &TestServer, name: &str, path: &std::path::Path, hidden: bool) -> i64 {
+    let layout = std::fs::read_to_string(path).unwrap();
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": name, "layout": layout, "hidden": hidden}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    v["maze_id"].as_i64().unwrap()
+}
+
+async fn wait_match(server: &TestServer, id: i64) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let (s, v) = server.get(&format!("/api/matches/{id}"), None).await;
+        assert_eq!(s, 200, "{v}");
+        if FINAL.contains(&v["status"].as_str().unwrap()) {
+            return v;
+        }
+        assert!(Instant::now() < deadline, "match {id} did not end: {v}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+async fn wait_tournament(server: &TestServer, id: i64, timeout: Duration) -> Value {
+    let deadline = Instant::now() + timeout;
+    loop {
+        let (s, v) = server.get(&format!("/api/tournaments/{id}"), None).await;
+        assert_eq!(s, 200, "{v}");
+        if v["done"] == v["total"] {
+            return v;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "tournament {id} did not end: {v}"
+        );
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+}
+
+fn assert_error(status: u16, body: &Value, want: u16) {
+    assert_eq!(status, want, "{body}");
+    assert!(
+        body["error"]["code"].is_string(),
+        "JSON error body expected: {body}"
+    );
+    assert!(!body["error"]["message"].as_str().unwrap().is_empty());
+}
+
+#[tokio::test]
+async fn a_match_over_http_scores_like_mazearena_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (bot, token) = register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let maze = upload_maze(
+        &server,
+        "classic-02",
+        &shared_maze("classic/test_maze_02.txt"),
+        false,
+    )
+    .await;
+    let (s, queued) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": maze, "seed": 11}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{queued}");
+    let done = wait_match(&server, queued["match_id"].as_i64().unwrap()).await;
+
+    let local = mazearena(&[
+        "run",
+        "--maze",
+        shared_maze("classic/test_maze_02.txt").to_str().unwrap(),
+        "--bot",
+        "python3 bots/python/simple_bot.py",
+        "--seed",
+        "11",
+        "--json",
+    ]);
+    let local: Value = serde_json::from_slice(&local.stdout).unwrap();
+    assert_eq!(done["status"], "finished");
+    for key in [
+        "status",
+        "score",
+        "run0_steps",
+        "run1_steps",
+        "total_steps",
+        "seed",
+        "maze_hash",
+    ] {
+        assert_eq!(done[key], local[key], "{key}: server {done} vs run {local}");
+    }
+    assert_eq!(done["bot_version"], 1);
+    assert!(done["timings"]["wall_ms"].is_u64());
+    assert_eq!(done["limits"]["move_timeout_ms"], 1000);
+
+    // The replay has every step; the log is the owner's.
+    let id = done["match_id"].as_i64().unwrap();
+    let (s, replay) = server.get(&format!("/api/matches/{id}/replay"), None).await;
+    assert_eq!(s, 200);
+    assert_eq!(
+        replay["trace"].as_array().unwrap().len() as u64,
+        done["total_steps"].as_u64().unwrap()
+    );
+    assert_eq!(replay["maze_dim"], 14);
+    let (s, log) = server
+        .get(&format!("/api/matches/{id}/log"), Some(&token))
+        .await;
+    assert_eq!(s, 200, "{log}");
+    assert!(log["error"].is_null());
+}
+
+#[tokio::test]
+async fn a_tournament_records_every_match_and_ranks_by_mean_score() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (a, _) = register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let (b, _) = register(
+        &server,
+        "adapter",
+        "python3 udacity_adapter.py robot.py",
+        adapter_bot_files(),
+    )
+    .await;
+    let mut mazes = Vec::new();
+    for n in 1..=3 {
+        let path = shared_maze(&format!("classic/test_maze_0{n}.txt"));
+        mazes.push(upload_maze(&server, &format!("classic-0{n}"), &path, true).await);
+    }
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "cup", "bot_ids": [a, b], "maze_ids": mazes, "repeats": 2}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    assert_eq!(t["total"], 12);
+    let id = t["tournament_id"].as_i64().unwrap();
+    let done = wait_tournament(&server, id, Duration::from_secs(120)).await;
+    assert_eq!(done["done"], 12);
+
+    // Exactly 12 records, one per (bot, maze, repeat), read from the database itself.
+    let storage = mazearena::storage::Storage::open(&server.database)
+        .await
+        .unwrap();
+    let rows = storage.tournament_matches(id).await.unwrap();
+    assert_eq!(rows.len(), 12);
+    let keys: BTreeSet<(i64, i64, i64)> = rows
+        .iter()
+        .map(|r| (r.bot_id, r.maze_id, r.repeat.unwrap()))
+        .collect();
+    assert_eq!(keys.len(), 12);
+    // The leaderboard's order follows the mean scores computed from the records.
+    let mut sums: BTreeMap<i64, (f64, f64)> = BTreeMap::new();
+    for r in &rows {
+        let score = if r.status == "finished" {
+            r.score.unwrap()
+        } else {
+            1000.0
+        };
+        let e = sums.entry(r.bot_id).or_default();
+        e.0 += score;
+        e.1 += 1.0;
+    }
+    let mut expected: Vec<(f64, i64)> = sums.iter().map(|(bot, (s, n))| (s / n, *bot)).collect();
+    expected.sort_by(|x, y| x.0.partial_cmp(&y.0).unwrap());
+    let (s, board) = server
+        .get(&format!("/api/leaderboard?tournament={id}"), None)
+        .await;
+    assert_eq!(s, 200);
+    let board = board.as_array().unwrap();
+    assert_eq!(board.len(), 2);
+    for (i, (mean, bot)) in expected.iter().enumerate() {
+        assert_eq!(board[i]["bot_id"], *bot);
+        assert_eq!(board[i]["rank"], i as i64 + 1);
+        assert!((board[i]["mean_score"].as_f64().unwrap() - mean).abs() < 1e-9);
+        assert_eq!(board[i]["played"], 6);
+        assert!(board[i]["mean_ratio"].as_f64().unwrap() > 1.0);
+    }
+    assert_eq!(done["standings"].as_array().unwrap().len(), 2);
+    // Hidden mazes are the ranking set: the default board counts these matches too.
+    let (_, ranking) = server.get("/api/leaderboard", None).await;
+    assert_eq!(ranking.as_array().unwrap().len(), 2);
+}
+
+#[tokio::test]
+async fn owner_and_admin_endpoints_refuse_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (bot, token) = register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let (_, other) = register(
+        &server,
+        "other",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let hidden = upload_maze(
+        &server,
+        "secret",
+        &shared_maze("classic/test_maze_01.txt"),
+        true,
+    )
+    .await;
+    let maze_text = std::fs::read_to_string(shared_maze("classic/test_maze_03.txt")).unwrap();
+    let upload = json!({"command": "python3 simple_bot.py", "files": simple_bot_files()});
+
+    // Admin only: uploading mazes, tournaments.
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "m", "layout": maze_text}),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 401);
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "m", "layout": maze_text}),
+            Some(&token),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    let t = json!({"name": "t", "bot_ids": [bot], "maze_ids": [1], "repeats": 1});
+    let (s, v) = server
+        .post("/api/tournaments", t.clone(), Some(&token))
+        .await;
+    assert_error(s, &v, 403);
+    // Owner only: new versions, matches, logs.
+    let (s, v) = server
+        .post(&format!("/api/bots/{bot}/versions"), upload.clone(), None)
+        .await;
+    assert_error(s, &v, 401);
+    let (s, v) = server
+        .post(
+            &format!("/api/bots/{bot}/versions"),
+            upload.clone(),
+            Some(&other),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v) = server
+        .post(
+            &format!("/api/bots/{bot}/versions"),
+            upload.clone(),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    assert_eq!(v["version"], 2);
+    let (s, v) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": 1}),
+            Some(&other),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v) = server
+        .post("/api/matches", json!({"bot_id": bot, "maze_id": 1}), None)
+        .await;
+    assert_error(s, &v, 401);
+    // Hidden mazes: no layout, no picture, no owner matches.
+    let (s, v) = server.get(&format!("/api/mazes/{hidden}"), None).await;
+    assert_eq!(s, 200);
+    assert!(v.get("layout").is_none(), "{v}");
+    let (s, v) = server
+        .get(&format!("/api/mazes/{hidden}"), Some(ADMIN))
+        .await;
+    assert_eq!(s, 200);
+    assert!(v["layout"].is_string());
+    let (s, v) = server
+        .get(&format!("/api/mazes/{hidden}/svg"), Some(&token))
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": hidden}),
+            Some(&token),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    // The admin may run it; its replay is the owner's and the admin's only.
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": hidden, "seed": 1}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let id = wait_match(&server, q["match_id"].as_i64().unwrap()).await["match_id"]
+        .as_i64()
+        .unwrap();
+    assert_eq!(
+        server
+            .get(&format!("/api/matches/{id}/replay"), Some(&token))
+            .await
+            .0,
+        200
+    );
+    let (s, v) = server
+        .get(&format!("/api/matches/{id}/replay"), Some(&other))
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v) = server.get(&format!("/api/matches/{id}/replay"), None).await;
+    assert_error(s, &v, 401);
+    let (s, v) = server
+        .get(&format!("/api/matches/{id}/log"), Some(&other))
+        .await;
+    assert_error(s, &v, 403);
+    assert_eq!(
+        server
+            .get(&format!("/api/matches/{id}/log"), Some(ADMIN))
+            .await
+            .0,
+        200
+    );
+    // A public maze's picture is for everyone.
+    let resp = server
+        .client()
+        .get(format!("{}/api/mazes/1/svg", server.base))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(resp.status(), 200);
+    assert!(resp.text().await.unwrap().contains("<svg"));
+    // A malformed Authorization header.
+    let resp = server
+        .client()
+        .post(format!("{}/api/matches", server.base))
+        .header("Authorization", "Basic abc")
+        .json(&json!({"bot_id": bot, "maze_id": 1}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(resp.status(), 401);
+}
+
+#[tokio::test]
+async fn bad_requests_get_a_4xx_json_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let url = |p: &str| format!("{}{p}", server.base);
+    let c = server.client();
+    let body = |r: reqwest::Response| async move {
+        let status = r.status().as_u16();
+        (
+            status,
+            serde_json::from_str::<Value>(&r.text().await.unwrap()).unwrap_or(Value::Null),
+        )
+    };
+    // Malformed JSON, wrong types, unknown fields, missing content type.
+    let r = c
+        .post(url("/api/matches"))
+        .header("content-type", "application/json")
+        .body("{\"bot_id\": ")
+        .send()
+        .await
+        .unwrap();
+    let (s, v) = body(r).await;
+    assert_error(s, &v, 400);
+    let (s, v) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": "x", "maze_id": 1}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 422);
+    let (s, v) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": 1, "maze_id": 1, "color": 1}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 422);
+    let r = c
+        .post(url("/api/mazes"))
+        .bearer_auth(ADMIN)
+        .body("{}")
+        .send()
+        .await
+        .unwrap();
+    let (s, v) = body(r).await;
+    assert_error(s, &v, 415);
+    // Unknown ids and routes, bad path parameters, wrong methods.
+    for path in [
+        "/api/bots/999",
+        "/api/mazes/999",
+        "/api/matches/999",
+        "/api/tournaments/999",
+        "/api/nothing",
+    ] {
+        let (s, v) = server.get(path, None).await;
+        assert_error(s, &v, 404);
+    }
+    let (s, v) = server.get("/api/leaderboard?tournament=999", None).await;
+    assert_error(s, &v, 404);
+    let (s, v) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": 999, "maze_id": 1}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 404);
+    let (s, v) = server.get("/api/bots/abc", None).await;
+    assert_error(s, &v, 400);
+    let (s, v) = server.get("/api/leaderboard?scope=weird", None).await;
+    assert_error(s, &v, 400);
+    let (s, v, _) = server.call(Method::DELETE, "/api/bots", None, None).await;
+    assert_error(s, &v, 405);
+    // Oversized bodies.
+    let big = "x".repeat(3 * 1024 * 1024);
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "big", "layout": big}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 413);
+    // A 40 MiB upload is refused from its Content-Length, before the body is read.
+    let (s, v) = raw_post_headers(&server.base, "/api/bots", 40 * 1024 * 1024).await;
+    assert_error(s, &v, 413);
+    // A bad maze names its line.
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "bad", "layout": "4\n1,5,7,5\n3,5,14\n"}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 422);
+    assert!(
+        v["error"]["message"].as_str().unwrap().contains("line 3"),
+        "{v}"
+    );
+    // A duplicate maze names the first.
+    let layout = std::fs::read_to_string(root().join("mazes/gen-12-s1.txt")).unwrap();
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "again", "layout": layout}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 409);
+    assert!(
+        v["error"]["message"].as_str().unwrap().contains("maze 1"),
+        "{v}"
+    );
+    // Archives that leave the bot's folder, bad base64, no files, bad names, taken names.
+    let archive = tar_gz(&[("../x", b"boom")]);
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": "evil", "command": "python3 x", "archive_base64": archive}),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 422);
+    assert!(
+        v["error"]["message"].as_str().unwrap().contains("../x"),
+        "{v}"
+    );
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": "b64", "command": "x", "archive_base64": "%%%"}),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 422);
+    let (s, v) = server
+        .post("/api/bots", json!({"name": "none", "command": "x"}), None)
+        .await;
+    assert_error(s, &v, 422);
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": "a b", "command": "x", "files": {"a": "1"}}),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 422);
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": "q", "command": "python3 'x", "files": {"a": "1"}}),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 422);
+    register(&server, "taken", "python3 a.py", json!({"a.py": "1"})).await;
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": "taken", "command": "x", "files": {"a": "1"}}),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 409);
+    // Nothing bad was stored, and the server still answers.
+    let (_, bots) = server.get("/api/bots", None).await;
+    assert_eq!(bots.as_array().unwrap().len(), 1);
+    assert_eq!(server.get("/healthz", None).await.0, 200);
+}
+
+#[tokio::test]
+async fn a_bot_uploaded_as_a_multipart_archive_plays() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let files = simple_bot_files();
+    let entries: Vec<(&str, &[u8])> = files
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(k, v)| (k.as_str(), v.as_str().unwrap().as_bytes()))
+        .collect();
+    let bytes = tar_gz_bytes(&entries);
+    let form = reqwest::multipart::Form::new()
+        .text("name", "packed")
+        .text("command", "python3 simple_bot.py")
+        .part(
+            "archive",
+            reqwest::multipart::Part::bytes(bytes).file_name("bot.tar.gz"),
+        );
+    let resp = server
+        .client()
+        .post(format!("{}/api/bots", server.base))
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(resp.status(), 201);
+    let v: Value = resp.json().await.unwrap();
+    let token = v["owner_token"].as_str().unwrap();
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": v["bot_id"], "maze_id": 1}),
+            Some(token),
+        )
+        .await;
+    assert_eq!(s, 202);
+    let done = wait_match(&server, q["match_id"].as_i64().unwrap()).await;
+    assert_eq!(done["status"], "finished", "{done}");
+}
+
+#[tokio::test]
+async fn hostile_bots_are_recorded_and_the_server_keeps_serving() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let fixtures = root().join("tests/fixtures/bots");
+    let mut ids = Vec::new();
+    for (name, status) in [
+        ("not_json", "protocol_error"),
+        ("exits_early", "crashed"),
+        ("killed_by_signal", "crashed"),
+    ] {
+        let code = std::fs::read_to_string(fixtures.join(format!("{name}.py"))).unwrap();
+        let (bot, token) = register(&server, name, "python3 bot.py", json!({"bot.py": code})).await;
+        let (_, q) = server
+            .post(
+                "/api/matches",
+                json!({"bot_id": bot, "maze_id": 1}),
+                Some(&token),
+            )
+            .await;
+        ids.push((q["match_id"].as_i64().unwrap(), status, token));
+    }
+    for (id, status, token) in ids {
+        let done = wait_match(&server, id).await;
+        assert_eq!(done["status"], status, "{done}");
+        assert!(done["score"].is_null());
+        let (_, log) = server
+            .get(&format!("/api/matches/{id}/log"), Some(&token))
+            .await;
+        assert!(
+            !log["error"]["reason"].as_str().unwrap().is_empty(),
+            "{log}"
+        );
+    }
+    assert_eq!(server.get("/healthz", None).await.0, 200);
+    let metrics = server
+        .client()
+        .get(format!("{}/metrics", server.base))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    assert!(
+        metrics.contains("mazearena_matches{status=\"crashed\"} 2"),
+        "{metrics}"
+    );
+    assert!(metrics.contains("mazearena_queue_depth 0"));
+    assert!(metrics.contains("mazearena_match_duration_seconds_count 3"));
+}
+
+#[tokio::test]
+async fn a_full_queue_answers_429_with_retry_after() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--max-queue", "0"]);
+    let (bot, token) = register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let (s, v, headers) = server
+        .call(
+            Method::POST,
+            "/api/matches",
+            Some(json!({"bot_id": bot, "maze_id": 1})),
+            Some(&token),
+        )
+        .await;
+    assert_error(s, &v, 429);
+    assert!(headers.get("retry-after").is_some());
+    let t = json!({"name": "t", "bot_ids": [bot], "maze_ids": [1, 2], "repeats": 1});
+    let (s, v) = server.post("/api/tournaments", t, Some(ADMIN)).await;
+    assert_error(s, &v, 429);
+}
+
+#[tokio::test]
+async fn the_openapi_document_lists_every_route() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (s, doc) = server.get("/api/openapi.json", None).await;
+    assert_eq!(s, 200);
+    let paths = doc["paths"].as_object().unwrap();
+    let expected = [
+        ("/api/bots", vec!["get", "post"]),
+        ("/api/bots/{id}", vec!["get"]),
+        ("/api/bots/{id}/versions", vec!["post"]),
+        ("/api/mazes", vec!["get", "post"]),
+        ("/api/mazes/{id}", vec!["get"]),
+        ("/api/mazes/{id}/svg", vec!["get"]),
+        ("/api/matches", vec!["post"]),
+        ("/api/matches/{id}", vec!["get"]),
+        ("/api/matches/{id}/replay", vec!["get"]),
+        ("/api/matches/{id}/log", vec!["get"]),
+        ("/api/tournaments", vec!["post"]),
+        ("/api/tournaments/{id}", vec!["get"]),
+        ("/api/leaderboard", vec!["get"]),
+        ("/healthz", vec!["get"]),
+        ("/metrics", vec!["get"]),
+        ("/api/openapi.json", vec!["get"]),
+    ];
+    assert_eq!(
+        paths.len(),
+        expected.len(),
+        "{:?}",
+        paths.keys().collect::<Vec<_>>()
+    );
+    for (path, methods) in expected {
+        let item = paths.get(path).unwrap_or_else(|| panic!("{path} missing"));
+        for m in methods {
+            assert!(item.get(m).is_some(), "{m} {path} missing");
+            // Each documented route really answers (not with the 404 fallback).
+            let concrete = path.replace("{id}", "1");
+            let method = Method::from_bytes(m.to_uppercase().as_bytes()).unwrap();
+            let (s, v, _) = server.call(method, &concrete, None, None).await;
+            assert!(
+                !(s == 404
+                    && v["error"]["message"]
+                        .as_str()
+                        .unwrap_or("")
+                        .contains("no such route")),
+                "{m} {path}"
+            );
+        }
+    }
+}
+
+#[tokio::test]
+async fn a_server_killed_mid_tournament_completes_it_after_a_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["--jobs", "2", "--lease-secs", "2"];
+    let mut server = TestServer::start(dir.path(), &args);
+    // A slow bot: the optimal script of maze 01 (17 steps), 30 ms per answer.
+    let solution = mazearena::engine::solver::solve(&crate::support::classic(1)).unwrap();
+    let mut script: Vec<String> = solution
+        .actions
+        .iter()
+        .map(|a| match a {
+            mazearena::engine::Action::Move { rotation, movement } => {
+                format!("{rotation},{movement}")
+            }
+            mazearena::engine::Action::Reset { .. } => "reset".into(),
+        })
+        .collect();
+    let run1 = script.clone();
+    script.push("reset".into());
+    script.extend(run1);
+    let code = std::fs::read_to_string(root().join("tests/fixtures/bots/scripted.py")).unwrap();
+    let command = format!("python3 scripted.py --delay-ms 30 {}", script.join(" "));
+    let (a, _) = register(&server, "slow-a", &command, json!({"scripted.py": code})).await;
+    let (b, _) = register(&server, "slow-b", &command, json!({"scripted.py": code})).await;
+    let maze = upload_maze(
+        &server,
+        "classic-01",
+        &shared_maze("classic/test_maze_01.txt"),
+        false,
+    )
+    .await;
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "crash", "bot_ids": [a, b], "maze_ids": [maze], "repeats": 5}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    let id = t["tournament_id"].as_i64().unwrap();
+    // Kill the server once some, but not all, matches are recorded.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let (_, v) = server.get(&format!("/api/tournaments/{id}"), None).await;
+        let done = v["done"].as_i64().unwrap();
+        if done >= 2 {
+            assert!(done < 10, "the tournament ended before the kill: {v}");
+            break;
+        }
+        assert!(Instant::now() < deadline);
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    server.kill();
+    let server = TestServer::start(dir.path(), &args);
+    let v = wait_tournament(&server, id, Duration::from_secs(120)).await;
+    assert_eq!(v["total"], 10);
+    assert_eq!(v["done"], 10);
+    let storage = mazearena::storage::Storage::open(&server.database)
+        .await
+        .unwrap();
+    let rows = storage.tournament_matches(id).await.unwrap();
+    assert_eq!(rows.len(), 10, "no duplicates, none lost");
+    let keys: BTreeSet<(i64, i64)> = rows.iter().map(|r| (r.bot_id, r.repeat.unwrap())).collect();
+    assert_eq!(keys.len(), 10);
+    for r in &rows {
+        assert_eq!(r.status, "finished", "{r:?}");
+        assert_eq!(r.score, Some(17.6));
+    }
+    assert!(
+        rows.iter().any(|r| r.attempts > 1),
+        "some match was re-run after the kill"
+    );
+}
+
+#[tokio::test]
+async fn sigterm_stops_the_server_without_losing_a_match() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["--jobs", "1", "--shutdown-grace-secs", "0"];
+    let mut server = TestServer::start(dir.path(), &args);
+    let code = std::fs::read_to_string(root().join("tests/fixtures/bots/scripted.py")).unwrap();
+    // Never finishes quickly: 1000 idle answers at 20 ms each.
+    let (bot, token) = register(
+        &server,
+        "idle",
+        "python3 scripted.py --delay-ms 20",
+        json!({"scripted.py": code}),
+    )
+    .await;
+    let (_, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": 1}),
+            Some(&token),
+        )
+        .await;
+    let id = q["match_id"].as_i64().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while server.get(&format!("/api/matches/{id}"), None).await.1["status"] != "running" {
+        assert!(Instant::now() < deadline);
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    let status = server.terminate();
+    assert!(status.success(), "{status:?}");
+    let storage = mazearena::storage::Storage::open(&server.database)
+        .await
+        .unwrap();
+    let row = storage.get_match(id).await.unwrap().unwrap();
+    assert_eq!(
+        row.status, "queued",
+        "the interrupted match is back in the queue"
+    );
+}
+
+/// A base64 `.tar.gz` with the given entries (names written raw, even unsafe ones).
+fn tar_gz(entries: &[(&str, &[u8])]) -> String {
+    use base64::Engine;
+    base64::engine::general_purpose::STANDARD.encode(tar_gz_bytes(entries))
+}
+
+fn tar_gz_bytes(entries: &[(&str, &[u8])]) -> Vec<u8> {
+    let gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    let mut builder = tar::Builder::new(gz);
+    for (name, data) in entries {
+        let mut header = tar::Header::new_gnu();
+        // Write the name bytes directly so unsafe names are kept as they are.
+        let bytes = name.as_bytes();
+        header.as_old_mut().name[..bytes.len()].copy_from_slice(bytes);
+        header.set_size(data.len() as u64);
+        header.set_mode(0o644);
+        header.set_entry_type(tar::EntryType::Regular);
+        header.set_cksum();
+        builder.append(&header, *data).unwrap();
+    }
+    builder.into_inner().unwrap().finish().unwrap()
+}
+
+/// Sends only the request line and headers of a POST claiming `length` bytes of JSON,
+/// and reads the answer (a server must refuse an oversized body without reading it).
+async fn raw_post_headers(base: &str, path: &str, length: usize) -> (u16, Value) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let addr = base.trim_start_matches("http://");
+    let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let head = format!(
+        "POST {path} HTTP/1.1\r\nHost: {addr}\r\nContent-Type: application/json\r\nContent-Length: {length}\r\nConnection: close\r\n\r\n"
+    );
+    stream.write_all(head.as_bytes()).await.unwrap();
+    let mut answer = Vec::new();
+    let _ = tokio::time::timeout(Duration::from_secs(10), stream.read_to_end(&mut answer)).await;
+    let text = String::from_utf8_lossy(&answer);
+    let status = text
+        .split_whitespace()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    let body = text.split("\r\n\r\n").nth(1).unwrap_or("");
+    // The body may be chunked: take the JSON object inside it.
+    let json = body
+        .find('{')
+        .and_then(|i| body.rfind('}').map(|j| &body[i..=j]))
+        .unwrap_or("");
+    (status, serde_json::from_str(json).unwrap_or(Value::Null))
+}
