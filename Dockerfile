@@ -1,0 +1,33 @@
+# mazearena server image: the release binary, plus Python 3 and Node.js so that
+# uploaded bots and the starter bots can run.
+
+FROM rust:1-bookworm AS build
+WORKDIR /src
+COPY Cargo.toml Cargo.lock build.rs ./
+COPY src src
+COPY migrations migrations
+COPY mazes mazes
+RUN cargo build --release --locked
+
+FROM debian:bookworm-slim
+RUN apt-get update \
+    && apt-get install -y --no-install-recommends python3 nodejs tini ca-certificates \
+    && rm -rf /var/lib/apt/lists/* \
+    && useradd --system --create-home --home-dir /var/lib/mazearena mazearena \
+    && mkdir -p /var/lib/mazearena/db /var/lib/mazearena/bots \
+    && chown -R mazearena:mazearena /var/lib/mazearena
+COPY --from=build /src/target/release/mazearena /usr/local/bin/mazearena
+COPY bots /opt/mazearena/bots
+COPY mazes /opt/mazearena/mazes
+USER mazearena
+WORKDIR /var/lib/mazearena
+ENV MAZEARENA_BIND=0.0.0.0:8080 \
+    MAZEARENA_DATABASE=sqlite:///var/lib/mazearena/db/mazearena.db \
+    MAZEARENA_DATA_DIR=/var/lib/mazearena/bots
+VOLUME ["/var/lib/mazearena/db", "/var/lib/mazearena/bots"]
+EXPOSE 8080
+HEALTHCHECK --interval=30s --timeout=5s \
+    CMD python3 -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8080/healthz', timeout=4)"
+# tini passes SIGTERM on, so running matches finish or are re-queued on `docker stop`.
+ENTRYPOINT ["tini", "--", "mazearena"]
+CMD ["serve"]
