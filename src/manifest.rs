@@ -5,6 +5,8 @@
 //! language = "python"             # for people
 //! command = "python3 simple_bot.py"
 //! build = "cargo build --release" # optional, run once in the folder before playing
+//! report = "seed 004, section 4.1"  # optional: where the strategy comes from
+//! claimed = { test_maze_01 = 18.133 } # optional: scores its author reported, by maze name
 //! ```
 //! A folder with several bots lists them as `[[bot]]` tables with the same keys.
 
@@ -16,7 +18,7 @@ use serde::Deserialize;
 pub const MANIFEST_FILE: &str = "bot.toml";
 
 /// One bot of a manifest.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BotManifest {
     /// Unique name.
@@ -32,6 +34,12 @@ pub struct BotManifest {
     /// Free text.
     #[serde(default)]
     pub description: Option<String>,
+    /// Where the strategy comes from (e.g. a report and its section).
+    #[serde(default)]
+    pub report: Option<String>,
+    /// Scores the strategy's author reported, by maze file name without extension.
+    #[serde(default)]
+    pub claimed: std::collections::BTreeMap<String, f64>,
     /// The folder (where the manifest is); filled in when loading.
     #[serde(skip)]
     pub dir: PathBuf,
