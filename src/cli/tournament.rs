@@ -138,10 +138,25 @@ async fn play(
     for b in &bots {
         version_ids.push(register(&storage, b).await?);
     }
-    let mut maze_ids = Vec::new();
+    let mut maze_ids: Vec<i64> = Vec::new();
+    let (mut duplicates, mut unsolvable) = (Vec::new(), Vec::new());
     for f in &maze_files {
-        maze_ids.push(store_maze(&storage, f).await?);
+        let name = f.display().to_string();
+        match store_maze(&storage, f).await? {
+            None => unsolvable.push(name),
+            Some(id) if maze_ids.contains(&id) => duplicates.push(name),
+            Some(id) => maze_ids.push(id),
+        }
     }
+    if !args.json {
+        if !duplicates.is_empty() {
+            eprintln!("skipped {} maze file(s) with the same layout as an earlier one: {}", duplicates.len(), duplicates.join(", "));
+        }
+        if !unsolvable.is_empty() {
+            eprintln!("skipped {} maze(s) whose goal room cannot be reached: {}", unsolvable.len(), unsolvable.join(", "));
+        }
+    }
+    anyhow::ensure!(!maze_ids.is_empty(), "no playable maze among the files given");
     let t = storage
         .create_tournament(&args.name, &version_ids, &maze_ids, args.repeats)
         .await?;
@@ -284,26 +299,32 @@ async fn register(storage: &Storage, bot: &BotManifest) -> anyhow::Result<i64> {
         .bot_version_id)
 }
 
-async fn store_maze(storage: &Storage, path: &Path) -> anyhow::Result<i64> {
+/// Stores a maze file (or finds it by layout); `None` when its goal cannot be reached.
+async fn store_maze(storage: &Storage, path: &Path) -> anyhow::Result<Option<i64>> {
     let maze = crate::cli::load_maze(path)?;
+    let optimum = solver::solve(&maze).map(|s| s.steps as i64);
+    if optimum.is_none() {
+        return Ok(None);
+    }
     if let Some(row) = storage.get_maze_by_hash(&maze.hash()).await? {
-        return Ok(row.maze_id);
+        return Ok(Some(row.maze_id));
     }
     let name = path
         .file_stem()
         .map_or_else(|| "maze".into(), |s| s.to_string_lossy().into_owned());
-    let optimum = solver::solve(&maze).map(|s| s.steps as i64);
-    Ok(storage
-        .insert_maze(&NewMaze {
-            name: &name,
-            hash: &maze.hash(),
-            dim: maze.dim() as i64,
-            layout: &numeric::write(&maze),
-            hidden: false,
-            optimum,
-        })
-        .await?
-        .maze_id)
+    Ok(Some(
+        storage
+            .insert_maze(&NewMaze {
+                name: &name,
+                hash: &maze.hash(),
+                dim: maze.dim() as i64,
+                layout: &numeric::write(&maze),
+                hidden: false,
+                optimum,
+            })
+            .await?
+            .maze_id,
+    ))
 }
 
 /// A content hash of a bot folder and its command (skipping build output folders), so
