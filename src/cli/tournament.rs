@@ -50,9 +50,13 @@ pub struct TournamentArgs {
     /// The tournament's name.
     #[arg(long, default_value = "local tournament")]
     name: String,
-    /// Print the result as JSON instead of a table.
-    #[arg(long)]
+    /// Print the result as JSON instead of a table (with every match).
+    #[arg(long, conflicts_with = "markdown")]
     json: bool,
+    /// Print the result as Markdown: every bot on every maze (run-0 steps, run-1 steps,
+    /// score, the score the bot's manifest says its author claimed), then the standings.
+    #[arg(long)]
+    markdown: bool,
 }
 
 /// Runs `mazearena tournament`.
@@ -150,13 +154,24 @@ async fn play(
     }
     if !args.json {
         if !duplicates.is_empty() {
-            eprintln!("skipped {} maze file(s) with the same layout as an earlier one: {}", duplicates.len(), duplicates.join(", "));
+            eprintln!(
+                "skipped {} maze file(s) with the same layout as an earlier one: {}",
+                duplicates.len(),
+                duplicates.join(", ")
+            );
         }
         if !unsolvable.is_empty() {
-            eprintln!("skipped {} maze(s) whose goal room cannot be reached: {}", unsolvable.len(), unsolvable.join(", "));
+            eprintln!(
+                "skipped {} maze(s) whose goal room cannot be reached: {}",
+                unsolvable.len(),
+                unsolvable.join(", ")
+            );
         }
     }
-    anyhow::ensure!(!maze_ids.is_empty(), "no playable maze among the files given");
+    anyhow::ensure!(
+        !maze_ids.is_empty(),
+        "no playable maze among the files given"
+    );
     let t = storage
         .create_tournament(&args.name, &version_ids, &maze_ids, args.repeats)
         .await?;
@@ -234,6 +249,7 @@ async fn play(
     let standings = storage
         .leaderboard(Scope::Tournament(t.tournament_id))
         .await?;
+    let results = results(&storage, t.tournament_id).await?;
     if args.json {
         let rows: Vec<serde_json::Value> = standings.iter().map(standing_json).collect();
         println!(
@@ -245,8 +261,11 @@ async fn play(
                 "done": t.done,
                 "elapsed_ms": elapsed.as_millis() as u64,
                 "standings": rows,
+                "matches": results,
             })
         );
+    } else if args.markdown {
+        print!("{}", markdown(&bots, &results, &standings));
     } else {
         print_table(&standings);
         let per_min = t.done as f64 / elapsed.as_secs_f64().max(1e-9) * 60.0;
@@ -395,4 +414,131 @@ fn print_table(rows: &[Standing]) {
             r.played
         );
     }
+}
+
+/// One played match, for reports.
+#[derive(Debug, Clone, serde::Serialize)]
+struct MatchResult {
+    bot: String,
+    maze: String,
+    repeat: i64,
+    status: String,
+    run0_steps: Option<i64>,
+    run1_steps: Option<i64>,
+    score: Option<f64>,
+}
+
+async fn results(storage: &Storage, tournament_id: i64) -> anyhow::Result<Vec<MatchResult>> {
+    let mut out = Vec::new();
+    let mut bot_names = std::collections::BTreeMap::new();
+    let mut maze_names = std::collections::BTreeMap::new();
+    for row in storage.tournament_matches(tournament_id).await? {
+        if let std::collections::btree_map::Entry::Vacant(e) = bot_names.entry(row.bot_id) {
+            e.insert(
+                storage
+                    .get_bot(row.bot_id)
+                    .await?
+                    .map_or_else(String::new, |b| b.name),
+            );
+        }
+        if let std::collections::btree_map::Entry::Vacant(e) = maze_names.entry(row.maze_id) {
+            e.insert(
+                storage
+                    .get_maze(row.maze_id)
+                    .await?
+                    .map_or_else(String::new, |m| m.name),
+            );
+        }
+        out.push(MatchResult {
+            bot: bot_names[&row.bot_id].clone(),
+            maze: maze_names[&row.maze_id].clone(),
+            repeat: row.repeat.unwrap_or(0),
+            status: row.status,
+            run0_steps: row.run0_steps,
+            run1_steps: row.run1_steps,
+            score: row.score,
+        });
+    }
+    Ok(out)
+}
+
+/// The Markdown report: bot x maze (means over repeats), then the standings.
+fn markdown(bots: &[BotManifest], results: &[MatchResult], standings: &[Standing]) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "| bot | maze | run-0 steps | run-1 steps | score | claimed |"
+    );
+    let _ = writeln!(out, "|---|---|---:|---:|---:|---:|");
+    let mut mazes: Vec<&str> = results.iter().map(|r| r.maze.as_str()).collect();
+    mazes.sort();
+    mazes.dedup();
+    for bot in bots {
+        for maze in &mazes {
+            let runs: Vec<&MatchResult> = results
+                .iter()
+                .filter(|r| r.bot == bot.name && r.maze == *maze)
+                .collect();
+            if runs.is_empty() {
+                continue;
+            }
+            let mean = |f: &dyn Fn(&MatchResult) -> Option<f64>| -> String {
+                let vals: Vec<f64> = runs.iter().filter_map(|r| f(r)).collect();
+                if vals.len() < runs.len() || vals.is_empty() {
+                    let dnf = runs.len() - vals.len();
+                    return format!("{dnf}/{} DNF", runs.len());
+                }
+                let m = vals.iter().sum::<f64>() / vals.len() as f64;
+                if runs.len() == 1 {
+                    format!("{m}")
+                } else {
+                    format!("{m:.1}")
+                }
+            };
+            let run0 = mean(&|r| r.run0_steps.map(|v| v as f64));
+            let run1 = mean(&|r| r.run1_steps.map(|v| v as f64));
+            let score = {
+                let vals: Vec<f64> = runs.iter().filter_map(|r| r.score).collect();
+                if vals.len() == runs.len() {
+                    format!("{:.3}", vals.iter().sum::<f64>() / vals.len() as f64)
+                } else {
+                    format!(
+                        "{} ({}/{} DNF)",
+                        runs[0].status,
+                        runs.len() - vals.len(),
+                        runs.len()
+                    )
+                }
+            };
+            let claimed = bot
+                .claimed
+                .get(*maze)
+                .map_or_else(|| "-".to_string(), |c| format!("{c}"));
+            let _ = writeln!(
+                out,
+                "| {} | {maze} | {run0} | {run1} | {score} | {claimed} |",
+                bot.name
+            );
+        }
+    }
+    let _ = writeln!(out);
+    let _ = writeln!(
+        out,
+        "| rank | bot | mean score | finish rate | mean score / optimum | played |"
+    );
+    let _ = writeln!(out, "|---:|---|---:|---:|---:|---:|");
+    for s in standings {
+        let _ = writeln!(
+            out,
+            "| {} | {} | {:.3} | {:.1}% | {} | {} |",
+            s.rank,
+            s.name,
+            s.mean_score,
+            s.finish_rate * 100.0,
+            s.mean_ratio.map_or("-".to_string(), |x| format!("{x:.3}")),
+            s.played
+        );
+    }
+    out
 }
