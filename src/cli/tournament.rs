@@ -81,8 +81,12 @@ pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
         );
     }
     let maze_files = maze_files(&args.mazes)?;
+    let mut built = std::collections::BTreeSet::new();
     for b in &bots {
-        build(b)?;
+        // Bots of one folder often share one build command: run it once.
+        if built.insert((b.dir.clone(), b.build.clone())) {
+            build(b)?;
+        }
     }
     let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
     runtime.block_on(play(args, bots, maze_files))

@@ -1,0 +1,351 @@
+//! A wall map built from the sensor rays, and a planner in the referee's own units.
+//!
+//! Every edge between two cells is unknown, open or a wall. A sensor reading `d` in a
+//! direction proves `d` open edges along that ray and a wall after them. The planner
+//! searches over (cell, heading) with the moves the referee allows in one step: one
+//! rotation (-90, 0, 90), then 0 to 3 cells forward or backward in a straight line. So a
+//! plan's length is exactly the number of steps it takes.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// Directions, clockwise: up (+y), right (+x), down, left.
+pub const UP: usize = 0;
+/// Right (+x).
+pub const RIGHT: usize = 1;
+/// Down (-y).
+pub const DOWN: usize = 2;
+/// Left (-x).
+pub const LEFT: usize = 3;
+
+const DX: [i32; 4] = [0, 1, 0, -1];
+const DY: [i32; 4] = [1, 0, -1, 0];
+
+/// What is known of one edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Edge {
+    /// Not seen yet.
+    Unknown,
+    /// Proven open.
+    Open,
+    /// Proven wall.
+    Wall,
+}
+
+/// Where the robot is and where it faces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Pose {
+    /// Column, 0 at the left.
+    pub x: usize,
+    /// Row, 0 at the bottom.
+    pub y: usize,
+    /// UP, RIGHT, DOWN or LEFT.
+    pub heading: usize,
+}
+
+impl Pose {
+    /// The start of every run: (0,0) facing up.
+    pub const START: Pose = Pose { x: 0, y: 0, heading: UP };
+}
+
+/// The map of a maze of side `n`.
+#[derive(Debug, Clone)]
+pub struct Map {
+    /// Side.
+    pub n: usize,
+
+    edges: Vec<[Edge; 4]>,
+}
+
+/// How the planner treats unknown edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Only proven-open edges: a plan that is sure to work.
+    Known,
+    /// Unknown edges count as open: the best the maze could still allow.
+    Optimistic,
+}
+
+/// A plan: the answers to give, in order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Plan {
+    /// Number of steps.
+    pub steps: u32,
+    /// Unknown edges it crosses.
+    pub unknown: u32,
+    /// (rotation, movement) per step.
+    pub actions: Vec<(i32, i32)>,
+    /// The pose after each step.
+    pub poses: Vec<Pose>,
+    /// Every unknown edge it crosses, as (x, y, direction) from the first cell.
+    pub unknown_edges: Vec<(usize, usize, usize)>,
+}
+
+impl Map {
+    /// An empty map: only the perimeter is known (walls).
+    pub fn new(n: usize) -> Map {
+        let mut map = Map {
+            n,
+
+            edges: vec![[Edge::Unknown; 4]; n * n],
+        };
+        for x in 0..n {
+            for y in 0..n {
+                for d in 0..4 {
+                    if map.neighbor(x, y, d).is_none() {
+                        map.edges[x * n + y][d] = Edge::Wall;
+                    }
+                }
+            }
+        }
+        map
+    }
+
+    /// The cell next to (x, y) in direction `d`, if on the grid.
+    pub fn neighbor(&self, x: usize, y: usize, d: usize) -> Option<(usize, usize)> {
+        let nx = x as i32 + DX[d];
+        let ny = y as i32 + DY[d];
+        if nx < 0 || ny < 0 || nx >= self.n as i32 || ny >= self.n as i32 {
+            None
+        } else {
+            Some((nx as usize, ny as usize))
+        }
+    }
+
+    /// What is known of the edge on side `d` of (x, y).
+    pub fn edge(&self, x: usize, y: usize, d: usize) -> Edge {
+        self.edges[x * self.n + y][d]
+    }
+
+    /// Records an edge (both sides).
+    pub fn set(&mut self, x: usize, y: usize, d: usize, e: Edge) {
+        self.edges[x * self.n + y][d] = e;
+        if let Some((nx, ny)) = self.neighbor(x, y, d) {
+            self.edges[nx * self.n + ny][(d + 2) % 4] = e;
+        }
+    }
+
+    /// Records what the sensors saw from `pose`: `[left, front, right]` open cells.
+    pub fn sense(&mut self, pose: Pose, sensors: [u32; 3]) {
+        for (i, &dist) in sensors.iter().enumerate() {
+            let d = (pose.heading + 3 + i) % 4;
+            let (mut x, mut y) = (pose.x, pose.y);
+            for _ in 0..dist {
+                self.set(x, y, d, Edge::Open);
+                match self.neighbor(x, y, d) {
+                    Some((nx, ny)) => (x, y) = (nx, ny),
+                    None => break,
+                }
+            }
+            self.set(x, y, d, Edge::Wall);
+        }
+    }
+
+    /// Whether (x, y) is in the goal room (the centre 2x2).
+    pub fn is_goal(&self, x: usize, y: usize) -> bool {
+        let (a, b) = (self.n / 2 - 1, self.n / 2);
+        (x == a || x == b) && (y == a || y == b)
+    }
+
+    /// The poses from which the sensors would see edge `d` of (x, y): along the line
+    /// through the edge, across proven-open edges, facing it or sideways to it.
+    pub fn viewpoints(&self, x: usize, y: usize, d: usize) -> Vec<Pose> {
+        let mut out = Vec::new();
+        let sides = [(x, y, d), match self.neighbor(x, y, d) {
+            Some((nx, ny)) => (nx, ny, (d + 2) % 4),
+            None => (x, y, d),
+        }];
+        for (sx, sy, look) in sides {
+            let (mut cx, mut cy) = (sx, sy);
+            loop {
+                for heading in [look, (look + 1) % 4, (look + 3) % 4] {
+                    out.push(Pose { x: cx, y: cy, heading });
+                }
+                let back = (look + 2) % 4;
+                if self.edge(cx, cy, back) != Edge::Open {
+                    break;
+                }
+                match self.neighbor(cx, cy, back) {
+                    Some((nx, ny)) => (cx, cy) = (nx, ny),
+                    None => break,
+                }
+            }
+        }
+        out
+    }
+
+    /// Unknown edges in the whole map.
+    pub fn unknown_count(&self) -> usize {
+        self.edges.iter().flatten().filter(|e| **e == Edge::Unknown).count() / 2
+    }
+
+    /// Where `(rotation, movement)` takes the robot from `pose`, if every edge crossed is
+    /// allowed in `mode`; with the number of unknown edges crossed.
+    pub fn apply(&self, pose: Pose, rotation: i32, movement: i32, mode: Mode) -> Option<(Pose, u32)> {
+        let heading = match rotation {
+            90 => (pose.heading + 1) % 4,
+            -90 => (pose.heading + 3) % 4,
+            _ => pose.heading,
+        };
+        let dir = if movement >= 0 { heading } else { (heading + 2) % 4 };
+        let (mut x, mut y) = (pose.x, pose.y);
+        let mut unknown = 0;
+        for _ in 0..movement.unsigned_abs() {
+            match self.edge(x, y, dir) {
+                Edge::Wall => return None,
+                Edge::Unknown if mode == Mode::Known => return None,
+                Edge::Unknown => unknown += 1,
+                Edge::Open => {}
+            }
+            (x, y) = self.neighbor(x, y, dir)?;
+        }
+        Some((Pose { x, y, heading }, unknown))
+    }
+
+    /// The fewest steps from `from` until a movement ends in a cell where `target` holds
+    /// (ties: fewest unknown edges). With `safe_first`, the first step may only cross
+    /// proven-open edges, so it can be taken without losing track of the robot.
+    pub fn plan(
+        &self,
+        from: Pose,
+        target: impl Fn(usize, usize) -> bool,
+        mode: Mode,
+        safe_first: bool,
+    ) -> Option<Plan> {
+        self.plan_weighted(from, |p| target(p.x, p.y), mode, safe_first, 1)
+    }
+
+    /// Like [`Map::plan`], but the target is a pose (cell and heading), and each unknown
+    /// edge crossed costs `unknown_milli` thousandths of a step: with a weight above 0,
+    /// plans through known ground are preferred to slightly shorter ones through unknown
+    /// ground (they are likelier to be real).
+    pub fn plan_weighted(
+        &self,
+        from: Pose,
+        target: impl Fn(Pose) -> bool,
+        mode: Mode,
+        safe_first: bool,
+        unknown_milli: u64,
+    ) -> Option<Plan> {
+        let n = self.n;
+        let index = |p: Pose| (p.x * n + p.y) * 4 + p.heading;
+        let mut best = vec![u64::MAX; n * n * 4];
+        let mut prev: Vec<Option<(Pose, (i32, i32))>> = vec![None; n * n * 4];
+        let mut heap = BinaryHeap::new();
+        best[index(from)] = 0;
+        heap.push(Reverse((0u64, from.x, from.y, from.heading, true)));
+        const STEP: u64 = 1000;
+        while let Some(Reverse((cost, x, y, heading, first))) = heap.pop() {
+            let pose = Pose { x, y, heading };
+            if cost > best[index(pose)] {
+                continue;
+            }
+            if !first && target(pose) {
+                return Some(self.unwind(from, pose, &prev));
+            }
+            let step_mode = if first && safe_first { Mode::Known } else { mode };
+            for rotation in [0, 90, -90] {
+                for movement in [3i32, 2, 1, 0, -1, -2, -3] {
+                    let Some((next, unknown)) = self.apply(pose, rotation, movement, step_mode) else {
+                        continue;
+                    };
+                    let c = cost + STEP + unknown as u64 * unknown_milli;
+                    // The target counts only at the end of a step, so the start pose is
+                    // never a goal by itself: allow re-entering it.
+                    if c < best[index(next)] || (next == from && first) {
+                        if c < best[index(next)] {
+                            best[index(next)] = c;
+                        }
+                        prev[index(next)] = Some((pose, (rotation, movement)));
+                        heap.push(Reverse((c, next.x, next.y, next.heading, false)));
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    fn unwind(&self, from: Pose, end: Pose, prev: &[Option<(Pose, (i32, i32))>]) -> Plan {
+        let n = self.n;
+        let index = |p: Pose| (p.x * n + p.y) * 4 + p.heading;
+        let mut actions = Vec::new();
+        let mut poses = Vec::new();
+        let mut at = end;
+        while let Some((p, action)) = prev[index(at)] {
+            actions.push(action);
+            poses.push(at);
+            at = p;
+            if at == from || actions.len() > n * n * 4 {
+                break;
+            }
+        }
+        actions.reverse();
+        poses.reverse();
+        let mut unknown_edges = Vec::new();
+        let mut pose = from;
+        for (&(rotation, movement), &next) in actions.iter().zip(&poses) {
+            let heading = match rotation {
+                90 => (pose.heading + 1) % 4,
+                -90 => (pose.heading + 3) % 4,
+                _ => pose.heading,
+            };
+            let dir = if movement >= 0 { heading } else { (heading + 2) % 4 };
+            let (mut x, mut y) = (pose.x, pose.y);
+            for _ in 0..movement.unsigned_abs() {
+                if self.edge(x, y, dir) == Edge::Unknown {
+                    unknown_edges.push((x, y, dir));
+                }
+                if let Some(c) = self.neighbor(x, y, dir) {
+                    (x, y) = c;
+                }
+            }
+            pose = next;
+        }
+        Plan {
+            steps: actions.len() as u32,
+            unknown: unknown_edges.len() as u32,
+            actions,
+            poses,
+            unknown_edges,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sensing_records_rays_and_walls() {
+        let mut m = Map::new(4);
+        m.sense(Pose::START, [0, 3, 1]);
+        assert_eq!(m.edge(0, 0, UP), Edge::Open);
+        assert_eq!(m.edge(0, 2, UP), Edge::Open);
+        assert_eq!(m.edge(0, 3, UP), Edge::Wall);
+        assert_eq!(m.edge(0, 0, RIGHT), Edge::Open);
+        assert_eq!(m.edge(1, 0, RIGHT), Edge::Wall);
+        assert_eq!(m.edge(1, 0, LEFT), Edge::Open);
+    }
+
+    #[test]
+    fn plans_count_steps_like_the_referee() {
+        // An open 4x4 map: from (0,0) up, one step reaches (1,1)? No: two steps
+        // (a move and a turn-and-move), as one step is one straight line.
+        let mut m = Map::new(4);
+        for x in 0..4 {
+            for y in 0..4 {
+                for d in 0..4 {
+                    if m.neighbor(x, y, d).is_some() {
+                        m.set(x, y, d, Edge::Open);
+                    }
+                }
+            }
+        }
+        let p = m.plan(Pose::START, |x, y| m.is_goal(x, y), Mode::Known, false).unwrap();
+        assert_eq!(p.steps, 2);
+        let unknown = Map::new(4);
+        assert!(unknown.plan(Pose::START, |x, y| unknown.is_goal(x, y), Mode::Known, false).is_none());
+        let o = unknown.plan(Pose::START, |x, y| unknown.is_goal(x, y), Mode::Optimistic, false).unwrap();
+        assert_eq!((o.steps, o.unknown), (2, 2));
+    }
+}
