@@ -1,6 +1,7 @@
 //! The one integration-test binary (one link step for CI): real files, real processes.
 
 mod api;
+mod bots;
 mod cli;
 mod mazefiles;
 mod referee;

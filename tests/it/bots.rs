@@ -1,0 +1,170 @@
+//! The reference bots in bots/: each starter kit's minimal bot plays a real match,
+//! every manifest works with `mazearena tournament` and finishes the classic mazes, and
+//! the champion finishes every contest maze whose goal room can be reached.
+
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::Value;
+
+use crate::support::{mazearena, root, shared_maze};
+
+/// Whether `program` runs on this machine.
+fn have(program: &str) -> bool {
+    Command::new(program)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// The kits whose toolchain is here: (folder, tools needed). Others are skipped with a
+/// printed reason.
+fn available_kits() -> Vec<&'static str> {
+    let kits: [(&str, &[&str]); 4] = [
+        ("python", &["python3"]),
+        ("javascript", &["node"]),
+        ("rust", &["cargo"]),
+        ("c", &["make", "cc"]),
+    ];
+    let mut out = Vec::new();
+    for (kit, tools) in kits {
+        match tools.iter().find(|t| !have(t)) {
+            Some(missing) => eprintln!("SKIPPED the {kit} kit: {missing} is not installed"),
+            None => out.push(kit),
+        }
+    }
+    out
+}
+
+fn build(dir: &Path, command: &[&str]) {
+    let status = Command::new(command[0])
+        .args(&command[1..])
+        .current_dir(dir)
+        .status()
+        .unwrap_or_else(|e| panic!("{command:?} in {}: {e}", dir.display()));
+    assert!(status.success(), "{command:?} failed in {}", dir.display());
+}
+
+fn run_json(maze: &str, bot: &str, dir: &Path) -> Value {
+    let out = mazearena(&[
+        "run",
+        "--maze",
+        maze,
+        "--bot",
+        bot,
+        "--bot-dir",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn each_starter_kits_minimal_bot_finishes_a_real_match() {
+    let maze = shared_maze("classic/test_maze_02.txt");
+    for kit in available_kits() {
+        let dir = root().join("bots").join(kit);
+        let bot = match kit {
+            "python" => "python3 simple_bot.py".to_string(),
+            "javascript" => "node minimal_bot.js".to_string(),
+            "rust" => {
+                build(&dir, &["cargo", "build", "--release", "--quiet"]);
+                dir.join("target/release/minimal_bot").display().to_string()
+            }
+            "c" => {
+                build(&dir, &["make", "-s"]);
+                dir.join("minimal_bot").display().to_string()
+            }
+            other => unreachable!("unknown kit {other}"),
+        };
+        let v = run_json(maze.to_str().unwrap(), &bot, &dir);
+        assert_eq!(v["status"], "finished", "{kit}: {v}");
+        assert!(
+            v["run1_steps"].as_u64().unwrap() >= 22,
+            "{kit}: no bot beats the optimum"
+        );
+    }
+}
+
+#[test]
+fn every_manifest_finishes_the_classic_mazes_in_a_tournament() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = format!("sqlite://{}", dir.path().join("bots.db").display());
+    let kits: Vec<String> = available_kits()
+        .iter()
+        .map(|k| format!("bots/{k}"))
+        .collect();
+    let mut args = vec!["tournament", "--bots"];
+    args.extend(kits.iter().map(String::as_str));
+    let classic = shared_maze("classic");
+    args.extend([
+        "--mazes",
+        classic.to_str().unwrap(),
+        "--database",
+        &db,
+        "--json",
+    ]);
+    let out = mazearena(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let matches = v["matches"].as_array().unwrap();
+    let bots = v["standings"].as_array().unwrap().len();
+    assert!(bots >= kits.len(), "every kit has at least one bot");
+    assert_eq!(matches.len(), bots * 3);
+    for m in matches {
+        assert_eq!(m["status"], "finished", "{m}");
+    }
+}
+
+#[test]
+fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
+    if !have("cargo") {
+        eprintln!("SKIPPED the champion test: cargo is not installed");
+        return;
+    }
+    let kit = root().join("bots/rust");
+    build(&kit, &["cargo", "build", "--release", "--quiet"]);
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("bot.toml");
+    std::fs::write(
+        &manifest,
+        format!(
+            "name = \"champion\"\ncommand = \"{}\"\n",
+            kit.join("target/release/champion").display()
+        ),
+    )
+    .unwrap();
+    let db = format!("sqlite://{}", dir.path().join("c.db").display());
+    let contest = shared_maze("micromouseonline/classic");
+    let out = mazearena(&[
+        "tournament",
+        "--bots",
+        manifest.to_str().unwrap(),
+        "--mazes",
+        contest.to_str().unwrap(),
+        "--database",
+        &db,
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    // 521 files: 2 have an unreachable goal room and 13 repeat another's layout.
+    assert_eq!(v["total"], 506);
+    let standing = &v["standings"][0];
+    assert_eq!(standing["finish_rate"], 1.0, "{standing}");
+    // Far better than the fewest-step optimum plus a full 1000-step exploration.
+    assert!(standing["mean_ratio"].as_f64().unwrap() < 1.5, "{standing}");
+}
