@@ -2,10 +2,18 @@
 //!
 //! # Layout
 //! - [`engine`]: the pure referee (maze model and files, rules, score, solver,
-//!   generator). No I/O.
+//!   generator, SVG). No I/O.
 //! - [`protocol`]: the bot protocol v1 messages and the strict decoding of bot replies.
 //! - [`runner`]: runs one bot process against one maze and returns a [`runner::MatchRecord`].
-//! - [`cli`]: the `mazearena` command line.
+//! - [`storage`]: the only SQL: bots, mazes, the match queue, tournaments, leaderboards.
+//! - [`worker`]: match workers that claim queued matches with a lease and record them.
+//! - [`api`]: the HTTP/JSON API (axum), with its OpenAPI document.
+//! - [`botfiles`]: safe unpacking of uploaded bots; [`manifest`]: `bot.toml` files.
+//! - [`metrics`]: Prometheus metrics.
+//! - [`cli`]: the `mazearena` command line (run, maze, serve, tournament).
+//!
+//! Dependencies point inwards: `engine` <- `protocol` <- `runner` <- `worker`/`storage`
+//! <- `api`, `cli`.
 
 pub mod api;
 pub mod botfiles;

@@ -48,26 +48,26 @@ typedef struct bot {
     int x, y, heading;
     int run;
     int entered_goal;
-} bot;
+} bot_state;
 
 /* --- map ----------------------------------------------------------------- */
 
-static int inside(const bot *b, int x, int y)
+static int inside(const bot_state *b, int x, int y)
 {
     return x >= 0 && y >= 0 && x < b->n && y < b->n;
 }
 
-static int cell(const bot *b, int x, int y)
+static int cell(const bot_state *b, int x, int y)
 {
     return x * b->n + y;
 }
 
-static int edge(const bot *b, int x, int y, int d)
+static int edge(const bot_state *b, int x, int y, int d)
 {
     return b->edges[cell(b, x, y) * 4 + d];
 }
 
-static void set_edge(bot *b, int x, int y, int d, int state)
+static void set_edge(bot_state *b, int x, int y, int d, int state)
 {
     int nx = x + DX[d], ny = y + DY[d];
     b->edges[cell(b, x, y) * 4 + d] = (unsigned char)state;
@@ -75,13 +75,13 @@ static void set_edge(bot *b, int x, int y, int d, int state)
         b->edges[cell(b, nx, ny) * 4 + ((d + 2) & 3)] = (unsigned char)state;
 }
 
-static int in_goal(const bot *b, int x, int y)
+static int in_goal(const bot_state *b, int x, int y)
 {
     int lo = b->n / 2 - 1, hi = b->n / 2;
     return x >= lo && x <= hi && y >= lo && y <= hi;
 }
 
-static void sense(bot *b, const int sensors[3])
+static void sense(bot_state *b, const int sensors[3])
 {
     for (int i = 0; i < 3; i++) {
         int d = (b->heading + i + 3) & 3; /* left, front, right */
@@ -98,7 +98,7 @@ static void sense(bot *b, const int sensors[3])
 
 /* --- run 0: flood fill, unknown = open ------------------------------------ */
 
-static void flood(bot *b)
+static void flood(bot_state *b)
 {
     int head = 0, tail = 0, lo = b->n / 2 - 1;
     for (int i = 0; i < b->n * b->n; i++)
@@ -124,7 +124,7 @@ static void flood(bot *b)
     }
 }
 
-static mb_answer explore_move(bot *b)
+static mb_answer explore_move(bot_state *b)
 {
     static const int order[4] = {0, 3, 1, 2}; /* straight, left, right, back */
     int here, rel = -1, d = 0;
@@ -173,7 +173,7 @@ static mb_answer explore_move(bot *b)
 
 /* --- run 1: BFS over (cell, heading), unknown = wall ----------------------- */
 
-static int plan_move(bot *b, mb_answer *out)
+static int plan_move(bot_state *b, mb_answer *out)
 {
     static const int rotations[3] = {0, -90, 90};
     static const int movements[7] = {3, 2, 1, -1, -2, -3, 0};
@@ -221,7 +221,7 @@ static int plan_move(bot *b, mb_answer *out)
 
 /* --- the bot interface ------------------------------------------------------ */
 
-static void home(bot *b)
+static void home(bot_state *b)
 {
     b->x = 0;
     b->y = 0;
@@ -230,7 +230,7 @@ static void home(bot *b)
 
 static void start(void *user, const mb_start_info *info)
 {
-    bot *b = user;
+    bot_state *b = user;
     int n = info->maze_dim;
     memset(b, 0, sizeof *b);
     if (n >= 2 && n <= MAX_DIM) {
@@ -256,7 +256,7 @@ static void start(void *user, const mb_start_info *info)
     home(b);
 }
 
-static void apply(bot *b, mb_answer a)
+static void apply(bot_state *b, mb_answer a)
 {
     /* dead reckoning; exact because moves only cross edges known to be open */
     b->heading = (b->heading + a.rotation / 90 + 4) & 3;
@@ -267,7 +267,7 @@ static void apply(bot *b, mb_answer a)
 
 static mb_answer next_move(void *user, const int sensors[3], int run, int step)
 {
-    bot *b = user;
+    bot_state *b = user;
     mb_answer a;
     (void)step;
     if (b->n == 0)
@@ -298,7 +298,7 @@ static void end(void *user, const mb_end_info *info)
 
 int main(void)
 {
-    static bot state;
+    static bot_state state;
     mb_bot bot = {&state, start, next_move, end};
     return mb_run(&bot);
 }

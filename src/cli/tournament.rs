@@ -147,11 +147,11 @@ async fn play(
         version_ids.push(register(&storage, b).await?);
     }
     let mut maze_ids: Vec<i64> = Vec::new();
-    let (mut duplicates, mut unsolvable) = (Vec::new(), Vec::new());
+    let (mut duplicates, mut unplayable): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
     for f in &maze_files {
         let name = f.display().to_string();
         match store_maze(&storage, f).await? {
-            None => unsolvable.push(name),
+            None => unplayable.push(name),
             Some(id) if maze_ids.contains(&id) => duplicates.push(name),
             Some(id) => maze_ids.push(id),
         }
@@ -164,11 +164,11 @@ async fn play(
                 duplicates.join(", ")
             );
         }
-        if !unsolvable.is_empty() {
+        if !unplayable.is_empty() {
             eprintln!(
                 "skipped {} maze(s) whose goal room cannot be reached: {}",
-                unsolvable.len(),
-                unsolvable.join(", ")
+                unplayable.len(),
+                unplayable.join(", ")
             );
         }
     }
@@ -176,6 +176,7 @@ async fn play(
         !maze_ids.is_empty(),
         "no playable maze among the files given"
     );
+    let skipped = (duplicates, unplayable);
     let t = storage
         .create_tournament(&args.name, &version_ids, &maze_ids, args.repeats)
         .await?;
@@ -266,6 +267,10 @@ async fn play(
                 "elapsed_ms": elapsed.as_millis() as u64,
                 "standings": rows,
                 "matches": results,
+                "skipped": {
+                    "duplicate_layout": skipped.0,
+                    "unreachable_goal": skipped.1,
+                },
             })
         );
     } else if args.markdown {
