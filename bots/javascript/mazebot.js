@@ -61,7 +61,12 @@ const util = require('util');
 /** Return this from nextMove to end run 0. */
 const RESET = 'reset';
 
-class BotError extends Error {}
+class BotError extends Error {
+  constructor(message) {
+    super(message);
+    this.name = 'BotError';
+  }
+}
 
 function isReset(v) {
   return typeof v === 'string' && v.toLowerCase() === RESET;

@@ -31,12 +31,14 @@
  *
  * Where the report is vague, the choices made here:
  * - "the manhattan distance between the current cell and the center of the goal
- *   area": the centre is taken as (maze_dim/2, maze_dim/2) with Python 2's
- *   integer division, i.e. the corner point shared by the four goal cells counted
- *   in cell coordinates of the upper-right goal cell: h = |x - n/2| + |y - n/2|.
- *   This choice reproduces the report's run-0 / run-1 step counts (405/17, 399/29,
- *   119/31) and hence its scores exactly on the three test mazes; the other
- *   readings (centre n/2 - 0.5, distance to the nearest goal cell) do not.
+ *   area": the centre is taken as (maze_dim/2, maze_dim/2), as Python 2's
+ *   `self.maze_dim/2` gives it: h = |x - n/2| + |y - n/2|, the distance to the
+ *   upper-right goal cell.
+ *   This choice reproduces the report's section IV to the step on the three test
+ *   mazes: runs of 405 + 17, 399 + 29 and 119 + 31 steps (30.500, 42.300, 34.967)
+ *   and its coverages 70.83%, 62.76%, 33.98% (the end log prints the coverage).
+ *   The other readings do not: centre (n-1)/2 or the nearest goal cell give
+ *   35.733 / 47.467 / 34.667, centre n/2 - 1 gives 34.867 / 45.067 / 35.267.
  * - search_maze ("makes up to 3 steps at most each time"): from the robot's cell
  *   it takes the policy's rotation and direction, then extends the move along the
  *   following cells while their policy keeps the same direction (no rotation), up
@@ -44,7 +46,9 @@
  * - A move toward a sensor's open side can only be left, front or right, so the
  *   robot never moves backward and never hits a wall.
  * - The report's code has no randomness; the seed is not used.
- * - Safety (not in the report): if A* finds no path or the policy has no entry for
+ * - Safety (not in the report): after a refused reset (only possible when the start
+ *   is a goal cell, n = 2) the robot makes an exploring move instead of asking
+ *   again. If A* finds no path or the policy has no entry for
  *   the robot's cell, it answers (0, 0) (stand still, always safe) until the step
  *   limit instead of failing; an unexpected exception (logged on stderr) leads to
  *   the same safe answer. On the test mazes neither happens.
@@ -108,7 +112,11 @@ class VisitCountBot {
       if (x !== 0 || y !== 0) wall += DIR_INT[DIR_REVERSE[this.heading]];
       this.map[x][y] = wall;
     }
-    if (this.inGoal(x, y)) return mazebot.RESET;
+    // (guard) after a refused reset (n = 2: the start is a goal cell) explore instead.
+    if (this.inGoal(x, y) && !this.resetRefused) {
+      this.askedReset = true;
+      return mazebot.RESET;
+    }
 
     const choices = [];
     for (let i = 0; i < 3; i++) {
@@ -204,7 +212,11 @@ class VisitCountBot {
         this.policy = this.aStarSearch();
         if (!this.policy) console.log('seed003: A* found no path');
       }
-      if (run === 0) return this.mapMaze(sensors);
+      if (run === 0) {
+        this.resetRefused = this.askedReset === true; // still run 0: the reset was refused
+        this.askedReset = false;
+        return this.mapMaze(sensors);
+      }
       return this.searchMaze();
     } catch (e) {
       console.log('seed003: internal error, standing still:', e && e.stack);
