@@ -45,7 +45,11 @@ pub struct Pose {
 
 impl Pose {
     /// The start of every run: (0,0) facing up.
-    pub const START: Pose = Pose { x: 0, y: 0, heading: UP };
+    pub const START: Pose = Pose {
+        x: 0,
+        y: 0,
+        heading: UP,
+    };
 }
 
 /// The map of a maze of side `n`.
@@ -151,15 +155,22 @@ impl Map {
     /// through the edge, across proven-open edges, facing it or sideways to it.
     pub fn viewpoints(&self, x: usize, y: usize, d: usize) -> Vec<Pose> {
         let mut out = Vec::new();
-        let sides = [(x, y, d), match self.neighbor(x, y, d) {
-            Some((nx, ny)) => (nx, ny, (d + 2) % 4),
-            None => (x, y, d),
-        }];
+        let sides = [
+            (x, y, d),
+            match self.neighbor(x, y, d) {
+                Some((nx, ny)) => (nx, ny, (d + 2) % 4),
+                None => (x, y, d),
+            },
+        ];
         for (sx, sy, look) in sides {
             let (mut cx, mut cy) = (sx, sy);
             loop {
                 for heading in [look, (look + 1) % 4, (look + 3) % 4] {
-                    out.push(Pose { x: cx, y: cy, heading });
+                    out.push(Pose {
+                        x: cx,
+                        y: cy,
+                        heading,
+                    });
                 }
                 let back = (look + 2) % 4;
                 if self.edge(cx, cy, back) != Edge::Open {
@@ -176,18 +187,33 @@ impl Map {
 
     /// Unknown edges in the whole map.
     pub fn unknown_count(&self) -> usize {
-        self.edges.iter().flatten().filter(|e| **e == Edge::Unknown).count() / 2
+        self.edges
+            .iter()
+            .flatten()
+            .filter(|e| **e == Edge::Unknown)
+            .count()
+            / 2
     }
 
     /// Where `(rotation, movement)` takes the robot from `pose`, if every edge crossed is
     /// allowed in `mode`; with the number of unknown edges crossed.
-    pub fn apply(&self, pose: Pose, rotation: i32, movement: i32, mode: Mode) -> Option<(Pose, u32)> {
+    pub fn apply(
+        &self,
+        pose: Pose,
+        rotation: i32,
+        movement: i32,
+        mode: Mode,
+    ) -> Option<(Pose, u32)> {
         let heading = match rotation {
             90 => (pose.heading + 1) % 4,
             -90 => (pose.heading + 3) % 4,
             _ => pose.heading,
         };
-        let dir = if movement >= 0 { heading } else { (heading + 2) % 4 };
+        let dir = if movement >= 0 {
+            heading
+        } else {
+            (heading + 2) % 4
+        };
         let (mut x, mut y) = (pose.x, pose.y);
         let mut unknown = 0;
         for _ in 0..movement.unsigned_abs() {
@@ -243,10 +269,15 @@ impl Map {
             if !first && target(pose) {
                 return Some(self.unwind(from, pose, &prev));
             }
-            let step_mode = if first && safe_first { Mode::Known } else { mode };
+            let step_mode = if first && safe_first {
+                Mode::Known
+            } else {
+                mode
+            };
             for rotation in [0, 90, -90] {
                 for movement in [3i32, 2, 1, 0, -1, -2, -3] {
-                    let Some((next, unknown)) = self.apply(pose, rotation, movement, step_mode) else {
+                    let Some((next, unknown)) = self.apply(pose, rotation, movement, step_mode)
+                    else {
                         continue;
                     };
                     let c = cost + STEP + unknown as u64 * unknown_milli;
@@ -289,7 +320,11 @@ impl Map {
                 -90 => (pose.heading + 3) % 4,
                 _ => pose.heading,
             };
-            let dir = if movement >= 0 { heading } else { (heading + 2) % 4 };
+            let dir = if movement >= 0 {
+                heading
+            } else {
+                (heading + 2) % 4
+            };
             let (mut x, mut y) = (pose.x, pose.y);
             for _ in 0..movement.unsigned_abs() {
                 if self.edge(x, y, dir) == Edge::Unknown {
@@ -341,11 +376,27 @@ mod tests {
                 }
             }
         }
-        let p = m.plan(Pose::START, |x, y| m.is_goal(x, y), Mode::Known, false).unwrap();
+        let p = m
+            .plan(Pose::START, |x, y| m.is_goal(x, y), Mode::Known, false)
+            .unwrap();
         assert_eq!(p.steps, 2);
         let unknown = Map::new(4);
-        assert!(unknown.plan(Pose::START, |x, y| unknown.is_goal(x, y), Mode::Known, false).is_none());
-        let o = unknown.plan(Pose::START, |x, y| unknown.is_goal(x, y), Mode::Optimistic, false).unwrap();
+        assert!(unknown
+            .plan(
+                Pose::START,
+                |x, y| unknown.is_goal(x, y),
+                Mode::Known,
+                false
+            )
+            .is_none());
+        let o = unknown
+            .plan(
+                Pose::START,
+                |x, y| unknown.is_goal(x, y),
+                Mode::Optimistic,
+                false,
+            )
+            .unwrap();
         assert_eq!((o.steps, o.unknown), (2, 2));
     }
 }

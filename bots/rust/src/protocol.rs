@@ -67,7 +67,11 @@ pub fn run<B: Bot>(mut bot: B) {
                     }
                     Answer::Reset => "{\"reset\":true}\n".to_string(),
                 };
-                if out.write_all(text.as_bytes()).and_then(|_| out.flush()).is_err() {
+                if out
+                    .write_all(text.as_bytes())
+                    .and_then(|_| out.flush())
+                    .is_err()
+                {
                     break;
                 }
             }

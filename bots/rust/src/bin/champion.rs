@@ -46,9 +46,21 @@ struct Champion {
 }
 
 impl Champion {
-    fn goal_plan(&self, from: Pose, mode: Mode, weight_milli: u64, safe_first: bool) -> Option<Plan> {
+    fn goal_plan(
+        &self,
+        from: Pose,
+        mode: Mode,
+        weight_milli: u64,
+        safe_first: bool,
+    ) -> Option<Plan> {
         let map = &self.map;
-        map.plan_weighted(from, |p| map.is_goal(p.x, p.y), mode, safe_first, weight_milli)
+        map.plan_weighted(
+            from,
+            |p| map.is_goal(p.x, p.y),
+            mode,
+            safe_first,
+            weight_milli,
+        )
     }
 
     /// The next step of run 0, or `None` to reset now.
@@ -100,7 +112,13 @@ impl Champion {
                 targets[index(p)] = true;
             }
         }
-        map.plan_weighted(self.pose, |p| targets[index(p)], Mode::Optimistic, true, self.unknown_milli)
+        map.plan_weighted(
+            self.pose,
+            |p| targets[index(p)],
+            Mode::Optimistic,
+            true,
+            self.unknown_milli,
+        )
     }
 }
 
@@ -117,7 +135,9 @@ impl Bot for Champion {
             match self.explore_step(step) {
                 Some(a) => Some(a),
                 None if self.hit_goal => {
-                    let known = self.goal_plan(Pose::START, Mode::Known, 1, false).map_or(0, |p| p.steps);
+                    let known = self
+                        .goal_plan(Pose::START, Mode::Known, 1, false)
+                        .map_or(0, |p| p.steps);
                     eprintln!("champion: reset at step {step} with a proven run of {known} steps");
                     self.pose = Pose::START;
                     return Answer::Reset;

@@ -32,7 +32,9 @@ impl Bot for Minimal {
         } else {
             map.plan(self.pose, |x, y| map.is_goal(x, y), Mode::Known, false)
         };
-        let (rotation, movement) = plan.and_then(|p| p.actions.first().copied()).unwrap_or((90, 0));
+        let (rotation, movement) = plan
+            .and_then(|p| p.actions.first().copied())
+            .unwrap_or((90, 0));
         // Every move crosses proven-open edges only, so it lands where planned.
         if let Some((next, _)) = map.apply(self.pose, rotation, movement, Mode::Known) {
             self.pose = next;
