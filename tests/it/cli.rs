@@ -470,7 +470,17 @@ fn the_shipped_mazes_are_valid_task_mazes() {
 #[tokio::test]
 async fn a_local_tournament_writes_every_match_and_prints_standings() {
     let dir = tempfile::tempdir().unwrap();
-    // Two manifests: the shipped Python folder, and the adapter with the fixture robot.
+    // Two manifests: the simple Python bot, and the adapter with the fixture robot.
+    let simple_dir = dir.path().join("simple");
+    std::fs::create_dir(&simple_dir).unwrap();
+    std::fs::write(
+        simple_dir.join("bot.toml"),
+        format!(
+            "name = \"simple-python\"\ncommand = \"python3 {}\"\n",
+            root().join("bots/python/simple_bot.py").display()
+        ),
+    )
+    .unwrap();
     let adapter_dir = dir.path().join("adapter");
     std::fs::create_dir(&adapter_dir).unwrap();
     let robot = root().join("tests/fixtures/robot_py/robot.py");
@@ -488,7 +498,7 @@ async fn a_local_tournament_writes_every_match_and_prints_standings() {
     let out = mazearena(&[
         "tournament",
         "--bots",
-        "bots/python",
+        simple_dir.to_str().unwrap(),
         adapter_dir.to_str().unwrap(),
         "--mazes",
         shared_maze("classic").to_str().unwrap(),
@@ -521,7 +531,7 @@ async fn a_local_tournament_writes_every_match_and_prints_standings() {
     let again = mazearena(&[
         "tournament",
         "--bots",
-        "bots/python",
+        simple_dir.to_str().unwrap(),
         "--mazes",
         shared_maze("classic/test_maze_01.txt").to_str().unwrap(),
         "--database",
