@@ -12,9 +12,8 @@ use utoipa_axum::routes;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
-use super::leaderboard::StandingView;
 use super::matches::check_capacity;
-use crate::storage::leaderboard::Scope;
+use crate::storage::leaderboard::{Scope, Standing};
 
 /// Most repeats of each (bot, maze) pair.
 pub const MAX_REPEATS: i64 = 100;
@@ -58,7 +57,7 @@ pub struct TournamentView {
     /// Matches in all.
     pub total: i64,
     /// Standings so far, best first.
-    pub standings: Vec<StandingView>,
+    pub standings: Vec<Standing>,
 }
 
 /// Start a tournament (admin token).
@@ -149,6 +148,6 @@ async fn get_tournament(
         repeats: t.repeats,
         done: t.done,
         total: t.total,
-        standings: standings.into_iter().map(Into::into).collect(),
+        standings,
     }))
 }

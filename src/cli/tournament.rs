@@ -256,7 +256,6 @@ async fn play(
         .await?;
     let results = results(&storage, t.tournament_id).await?;
     if args.json {
-        let rows: Vec<serde_json::Value> = standings.iter().map(standing_json).collect();
         println!(
             "{}",
             serde_json::json!({
@@ -265,7 +264,7 @@ async fn play(
                 "total": t.total,
                 "done": t.done,
                 "elapsed_ms": elapsed.as_millis() as u64,
-                "standings": rows,
+                "standings": standings,
                 "matches": results,
                 "skipped": {
                     "duplicate_layout": skipped.0,
@@ -396,14 +395,6 @@ fn walk(root: &Path, dir: &Path, depth: usize, out: &mut Vec<(String, PathBuf)>)
             out.push((rel, p));
         }
     }
-}
-
-fn standing_json(s: &Standing) -> serde_json::Value {
-    serde_json::json!({
-        "rank": s.rank, "bot_id": s.bot_id, "name": s.name, "version": s.version,
-        "played": s.played, "finished": s.finished, "mean_score": s.mean_score,
-        "finish_rate": s.finish_rate, "mean_ratio": s.mean_ratio,
-    })
 }
 
 fn print_table(rows: &[Standing]) {

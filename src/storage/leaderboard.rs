@@ -17,8 +17,8 @@ pub enum Scope {
     All,
 }
 
-/// One bot's line.
-#[derive(Debug, Clone, PartialEq, FromRow)]
+/// One bot's line (also the API's and the CLI's JSON shape).
+#[derive(Debug, Clone, PartialEq, FromRow, serde::Serialize, utoipa::ToSchema)]
 pub struct Standing {
     /// 1 for the best mean score.
     #[sqlx(skip)]
