@@ -1,6 +1,7 @@
 /*
  * minimal_bot: a small, deterministic reference bot for mazearena, in C.
- * The C twin of bots/python/simple_bot.py; the protocol is in mazebot.c.
+ * The C twin of bots/python/simple_bot.py; the protocol is in mazebot.c, the
+ * wall map and dead reckoning in mazemap.c.
  *
  * Strategy
  * --------
@@ -25,100 +26,50 @@
  * on the spot until the step limit: it never crashes and never hits a wall.
  */
 #include "mazebot.h"
+#include "mazemap.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-enum { UP, RIGHT, DOWN, LEFT };
-enum { UNKNOWN = 0, OPEN = 1, WALL = 2 };
 #define INF 0x3fffffff
 #define MAX_DIM 1024 /* larger mazes: the bot only turns on the spot */
 
-static const int DX[4] = {0, 1, 0, -1};
-static const int DY[4] = {1, 0, -1, 0};
-
 typedef struct bot {
-    int n;                /* side of the maze; 0 = unusable maze, only safe moves */
-    unsigned char *edges; /* edges[(x * n + y) * 4 + d] */
+    mm_map map;           /* walls; map.n = 0: unusable maze, only safe moves */
     int *dist;            /* flood fill */
     int *queue;           /* BFS queue: n*n*4 entries */
     int *parent;          /* run-1 BFS: parent state, or -1 */
     signed char *act;     /* run-1 BFS: action that led to the state, (rot index, movement) */
-    int x, y, heading;
+    mm_pose pose;         /* where the robot is (dead reckoning) */
     int run;
     int entered_goal;
 } bot_state;
-
-/* --- map ----------------------------------------------------------------- */
-
-static int inside(const bot_state *b, int x, int y)
-{
-    return x >= 0 && y >= 0 && x < b->n && y < b->n;
-}
-
-static int cell(const bot_state *b, int x, int y)
-{
-    return x * b->n + y;
-}
-
-static int edge(const bot_state *b, int x, int y, int d)
-{
-    return b->edges[cell(b, x, y) * 4 + d];
-}
-
-static void set_edge(bot_state *b, int x, int y, int d, int state)
-{
-    int nx = x + DX[d], ny = y + DY[d];
-    b->edges[cell(b, x, y) * 4 + d] = (unsigned char)state;
-    if (inside(b, nx, ny))
-        b->edges[cell(b, nx, ny) * 4 + ((d + 2) & 3)] = (unsigned char)state;
-}
-
-static int in_goal(const bot_state *b, int x, int y)
-{
-    int lo = b->n / 2 - 1, hi = b->n / 2;
-    return x >= lo && x <= hi && y >= lo && y <= hi;
-}
-
-static void sense(bot_state *b, const int sensors[3])
-{
-    for (int i = 0; i < 3; i++) {
-        int d = (b->heading + i + 3) & 3; /* left, front, right */
-        int x = b->x, y = b->y;
-        for (int k = 0; k < sensors[i] && inside(b, x + DX[d], y + DY[d]); k++) {
-            set_edge(b, x, y, d, OPEN);
-            x += DX[d];
-            y += DY[d];
-        }
-        if (sensors[i] >= 0)
-            set_edge(b, x, y, d, WALL);
-    }
-}
 
 /* --- run 0: flood fill, unknown = open ------------------------------------ */
 
 static void flood(bot_state *b)
 {
-    int head = 0, tail = 0, lo = b->n / 2 - 1;
-    for (int i = 0; i < b->n * b->n; i++)
+    const mm_map *map = &b->map;
+    int head = 0, tail = 0, lo = mm_goal_lo(map);
+    for (int i = 0; i < map->n * map->n; i++)
         b->dist[i] = INF;
     for (int gx = lo; gx <= lo + 1; gx++)
         for (int gy = lo; gy <= lo + 1; gy++) {
-            if (!inside(b, gx, gy))
+            if (!mm_inside(map, gx, gy))
                 continue;
-            b->dist[cell(b, gx, gy)] = 0;
-            b->queue[tail++] = cell(b, gx, gy);
+            b->dist[mm_cell(map, gx, gy)] = 0;
+            b->queue[tail++] = mm_cell(map, gx, gy);
         }
     while (head < tail) {
-        int c = b->queue[head++], x = c / b->n, y = c % b->n;
+        int c = b->queue[head++], x = c / map->n, y = c % map->n;
         for (int d = 0; d < 4; d++) {
-            int nx = x + DX[d], ny = y + DY[d];
-            if (edge(b, x, y, d) == WALL || !inside(b, nx, ny))
+            int nx = x + MM_DX[d], ny = y + MM_DY[d];
+            if (mm_edge(map, x, y, d) == MM_WALL || !mm_inside(map, nx, ny))
                 continue;
-            if (b->dist[cell(b, nx, ny)] == INF) {
-                b->dist[cell(b, nx, ny)] = b->dist[c] + 1;
-                b->queue[tail++] = cell(b, nx, ny);
+            if (b->dist[mm_cell(map, nx, ny)] == INF) {
+                b->dist[mm_cell(map, nx, ny)] = b->dist[c] + 1;
+                b->queue[tail++] = mm_cell(map, nx, ny);
             }
         }
     }
@@ -126,18 +77,19 @@ static void flood(bot_state *b)
 
 static mb_answer explore_move(bot_state *b)
 {
+    const mm_map *map = &b->map;
     static const int order[4] = {0, 3, 1, 2}; /* straight, left, right, back */
     int here, rel = -1, d = 0;
 
     flood(b);
-    here = b->dist[cell(b, b->x, b->y)];
+    here = b->dist[mm_cell(map, b->pose.x, b->pose.y)];
     if (here == INF)
         return mb_move(90, 0); /* the goal is walled off: turn on the spot */
     for (int i = 0; i < 4; i++) {
-        int dd = (b->heading + order[i]) & 3;
-        int nx = b->x + DX[dd], ny = b->y + DY[dd];
-        if (edge(b, b->x, b->y, dd) != WALL && inside(b, nx, ny) &&
-            b->dist[cell(b, nx, ny)] == here - 1) {
+        int dd = (b->pose.heading + order[i]) & 3;
+        int nx = b->pose.x + MM_DX[dd], ny = b->pose.y + MM_DY[dd];
+        if (mm_edge(map, b->pose.x, b->pose.y, dd) != MM_WALL && mm_inside(map, nx, ny) &&
+            b->dist[mm_cell(map, nx, ny)] == here - 1) {
             rel = order[i];
             d = dd;
             break;
@@ -145,27 +97,27 @@ static mb_answer explore_move(bot_state *b)
     }
     if (rel < 0) { /* in the goal room without having entered it (n = 2): step out */
         for (int dd = 0; dd < 4 && rel < 0; dd++)
-            if (edge(b, b->x, b->y, dd) == OPEN) {
-                rel = (dd - b->heading + 4) & 3;
+            if (mm_edge(map, b->pose.x, b->pose.y, dd) == MM_OPEN) {
+                rel = (dd - b->pose.heading + 4) & 3;
                 d = dd;
             }
         if (rel < 0)
             return mb_move(90, 0); /* look around */
     }
-    if (edge(b, b->x, b->y, d) != OPEN)
+    if (mm_edge(map, b->pose.x, b->pose.y, d) != MM_OPEN)
         return mb_move(90, 0); /* the edge behind is unsensed: turn to look at it */
 
     int rotation = rel == 1 ? 90 : rel == 3 ? -90 : 0;
     int sign = rel == 2 ? -1 : 1;
-    int cells = 0, x = b->x, y = b->y;
-    while (cells < 3 && edge(b, x, y, d) == OPEN) {
-        int nx = x + DX[d], ny = y + DY[d];
-        if (cells > 0 && b->dist[cell(b, nx, ny)] != b->dist[cell(b, x, y)] - 1)
+    int cells = 0, x = b->pose.x, y = b->pose.y;
+    while (cells < 3 && mm_edge(map, x, y, d) == MM_OPEN) {
+        int nx = x + MM_DX[d], ny = y + MM_DY[d];
+        if (cells > 0 && b->dist[mm_cell(map, nx, ny)] != b->dist[mm_cell(map, x, y)] - 1)
             break;
         x = nx;
         y = ny;
         cells++;
-        if (in_goal(b, x, y))
+        if (mm_in_goal(map, x, y))
             break;
     }
     return mb_move(rotation, sign * cells);
@@ -175,10 +127,11 @@ static mb_answer explore_move(bot_state *b)
 
 static int plan_move(bot_state *b, mb_answer *out)
 {
+    const mm_map *map = &b->map;
     static const int rotations[3] = {0, -90, 90};
     static const int movements[7] = {3, 2, 1, -1, -2, -3, 0};
-    int states = b->n * b->n * 4, head = 0, tail = 0;
-    int start = cell(b, b->x, b->y) * 4 + b->heading;
+    int states = map->n * map->n * 4, head = 0, tail = 0;
+    int start = mm_cell(map, b->pose.x, b->pose.y) * 4 + b->pose.heading;
 
     for (int i = 0; i < states; i++)
         b->parent[i] = -2; /* unvisited */
@@ -186,27 +139,28 @@ static int plan_move(bot_state *b, mb_answer *out)
     b->queue[tail++] = start;
     while (head < tail) {
         int s = b->queue[head++];
-        int x0 = s / 4 / b->n, y0 = s / 4 % b->n, h0 = s % 4;
+        int x0 = s / 4 / map->n, y0 = s / 4 % map->n, h0 = s % 4;
         for (int r = 0; r < 3; r++) {
             int h = (h0 + rotations[r] / 90 + 4) & 3;
             for (int m = 0; m < 7; m++) {
                 int mv = movements[m], d = mv >= 0 ? h : (h + 2) & 3;
                 int x = x0, y = y0, ok = 1;
                 for (int k = 0; k < abs(mv); k++) {
-                    if (edge(b, x, y, d) != OPEN || !inside(b, x + DX[d], y + DY[d])) {
+                    if (mm_edge(map, x, y, d) != MM_OPEN ||
+                        !mm_inside(map, x + MM_DX[d], y + MM_DY[d])) {
                         ok = 0;
                         break;
                     }
-                    x += DX[d];
-                    y += DY[d];
+                    x += MM_DX[d];
+                    y += MM_DY[d];
                 }
-                int t = cell(b, x, y) * 4 + h;
+                int t = mm_cell(map, x, y) * 4 + h;
                 if (!ok || b->parent[t] != -2)
                     continue;
                 b->parent[t] = s;
                 b->act[t * 2] = (signed char)r;
                 b->act[t * 2 + 1] = (signed char)mv;
-                if (in_goal(b, x, y)) { /* walk back to the first action of the plan */
+                if (mm_in_goal(map, x, y)) { /* walk back to the first action of the plan */
                     while (b->parent[t] != start)
                         t = b->parent[t];
                     *out = mb_move(rotations[(int)b->act[t * 2]], b->act[t * 2 + 1]);
@@ -223,9 +177,9 @@ static int plan_move(bot_state *b, mb_answer *out)
 
 static void home(bot_state *b)
 {
-    b->x = 0;
-    b->y = 0;
-    b->heading = UP;
+    b->pose.x = 0;
+    b->pose.y = 0;
+    b->pose.heading = MM_UP;
 }
 
 static void start(void *user, const mb_start_info *info)
@@ -235,34 +189,16 @@ static void start(void *user, const mb_start_info *info)
     memset(b, 0, sizeof *b);
     if (n >= 2 && n <= MAX_DIM) {
         size_t cells = (size_t)n * (size_t)n;
-        b->edges = calloc(cells * 4, 1);
         b->dist = malloc(cells * sizeof *b->dist);
         b->queue = malloc(cells * 4 * sizeof *b->queue);
         b->parent = malloc(cells * 4 * sizeof *b->parent);
         b->act = malloc(cells * 4 * 2);
-        if (b->edges && b->dist && b->queue && b->parent && b->act)
-            b->n = n;
-        else
+        if (!(b->dist && b->queue && b->parent && b->act && mm_map_init(&b->map, n)))
             fprintf(stderr, "minimal_bot: out of memory for a %dx%d maze\n", n, n);
     } else {
         fprintf(stderr, "minimal_bot: cannot map a %dx%d maze; turning on the spot\n", n, n);
     }
-    for (int i = 0; i < b->n; i++) {
-        set_edge(b, i, 0, DOWN, WALL);
-        set_edge(b, i, b->n - 1, UP, WALL);
-        set_edge(b, 0, i, LEFT, WALL);
-        set_edge(b, b->n - 1, i, RIGHT, WALL);
-    }
     home(b);
-}
-
-static void apply(bot_state *b, mb_answer a)
-{
-    /* dead reckoning; exact because moves only cross edges known to be open */
-    b->heading = (b->heading + a.rotation / 90 + 4) & 3;
-    int d = a.movement >= 0 ? b->heading : (b->heading + 2) & 3;
-    b->x += DX[d] * abs(a.movement);
-    b->y += DY[d] * abs(a.movement);
 }
 
 static mb_answer next_move(void *user, const int sensors[3], int run, int step)
@@ -270,19 +206,19 @@ static mb_answer next_move(void *user, const int sensors[3], int run, int step)
     bot_state *b = user;
     mb_answer a;
     (void)step;
-    if (b->n == 0)
+    if (b->map.n == 0)
         return mb_move(90, 0);
     if (run != b->run) { /* the reset was accepted: back at the start */
         b->run = run;
         home(b);
     }
-    sense(b, sensors);
+    mm_sense(&b->map, &b->pose, sensors);
     if (run == 0 && b->entered_goal)
         return mb_reset();
     if (run != 1 || !plan_move(b, &a))
         a = explore_move(b);
-    apply(b, a);
-    if (run == 0 && in_goal(b, b->x, b->y))
+    mm_apply(&b->pose, a); /* exact: moves only cross edges known to be open */
+    if (run == 0 && mm_in_goal(&b->map, b->pose.x, b->pose.y))
         b->entered_goal = 1;
     return a;
 }

@@ -70,23 +70,22 @@
  * 6. If A* finds no way to the goal (it is walled off) the robot turns on the
  *    spot until the step limit; it never hits a wall.
  *
+ * The wall map, the sensor rays and dead reckoning are in mazemap.c (shared
+ * with minimal_bot.c); the protocol is in mazebot.c.
+ *
  * Deterministic: the seed is not used.
  */
 #include "mazebot.h"
+#include "mazemap.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-enum { UP, RIGHT, DOWN, LEFT };
-enum { UNKNOWN = 0, OPEN = 1, WALL = 2 };
 enum { UNSEEN = 0, ACTIVE = 1, CLOSED = 2 }; /* A* sets */
 enum { EXPLORE, RESET_NEXT, STUCK };         /* run-0 phases */
 #define NOT_REACHED 1000                     /* the report's score of unreached cells */
 #define MAX_DIM 256                          /* larger mazes: only safe moves */
-
-static const int DX[4] = {0, 1, 0, -1};
-static const int DY[4] = {1, 0, -1, 0};
 
 /* A binary min-heap of (key, cell), lazily updated. */
 typedef struct heap {
@@ -96,8 +95,7 @@ typedef struct heap {
 } heap;
 
 typedef struct bot {
-    int n;                /* 0: unusable maze, only safe moves */
-    unsigned char *edges; /* edges[cell * 4 + d]: UNKNOWN, OPEN or WALL */
+    mm_map map; /* walls; map.n = 0: unusable maze, only safe moves */
     /* one A* search (or the run-1 Dijkstra) */
     int *g;
     int *parent;
@@ -106,7 +104,7 @@ typedef struct bot {
     long long *cost;
     heap h;
     /* robot */
-    int x, y, heading;
+    mm_pose pose;
     int moved; /* a move has ended somewhere in this run */
     int run, phase;
     /* run 1 plan */
@@ -152,66 +150,32 @@ static void heap_pop(heap *h, long long *key, int *val)
     h->val[i] = v;
 }
 
-/* --- map ------------------------------------------------------------------- */
-
-static int inside(const bot_state *b, int x, int y)
-{
-    return x >= 0 && y >= 0 && x < b->n && y < b->n;
-}
-
-static int cell(const bot_state *b, int x, int y)
-{
-    return x * b->n + y;
-}
+/* --- map, by cell index (see mazemap.h) ------------------------------------- */
 
 static int edge(const bot_state *b, int c, int d)
 {
-    return b->edges[c * 4 + d];
+    return b->map.edges[c * 4 + d];
 }
 
 /* The cell beyond side d of c, or -1 outside the maze. */
 static int neighbour(const bot_state *b, int c, int d)
 {
-    int x = c / b->n + DX[d], y = c % b->n + DY[d];
-    return inside(b, x, y) ? cell(b, x, y) : -1;
-}
-
-static void set_edge(bot_state *b, int x, int y, int d, int state)
-{
-    int nx = x + DX[d], ny = y + DY[d];
-    b->edges[cell(b, x, y) * 4 + d] = (unsigned char)state;
-    if (inside(b, nx, ny))
-        b->edges[cell(b, nx, ny) * 4 + ((d + 2) & 3)] = (unsigned char)state;
+    int x = c / b->map.n + MM_DX[d], y = c % b->map.n + MM_DY[d];
+    return mm_inside(&b->map, x, y) ? mm_cell(&b->map, x, y) : -1;
 }
 
 static int in_goal(const bot_state *b, int c)
 {
-    int x = c / b->n, y = c % b->n, lo = b->n / 2 - 1, hi = b->n / 2;
-    return x >= lo && x <= hi && y >= lo && y <= hi;
+    return mm_in_goal(&b->map, c / b->map.n, c % b->map.n);
 }
 
 /* H(x): Manhattan distance to the nearest cell of the goal room. */
 static int heuristic(const bot_state *b, int c)
 {
-    int x = c / b->n, y = c % b->n, lo = b->n / 2 - 1, hi = b->n / 2;
+    int x = c / b->map.n, y = c % b->map.n, lo = mm_goal_lo(&b->map), hi = lo + 1;
     int dx = x < lo ? lo - x : x > hi ? x - hi : 0;
     int dy = y < lo ? lo - y : y > hi ? y - hi : 0;
     return dx + dy;
-}
-
-static void sense(bot_state *b, const int sensors[3])
-{
-    for (int i = 0; i < 3; i++) {
-        int d = (b->heading + i + 3) & 3; /* left, front, right */
-        int x = b->x, y = b->y;
-        for (int k = 0; k < sensors[i] && inside(b, x + DX[d], y + DY[d]); k++) {
-            set_edge(b, x, y, d, OPEN);
-            x += DX[d];
-            y += DY[d];
-        }
-        if (sensors[i] >= 0)
-            set_edge(b, x, y, d, WALL);
-    }
 }
 
 /* --- run 0: A* from the robot to the goal room ------------------------------- */
@@ -227,7 +191,7 @@ static long long astar_key(const bot_state *b, int c)
  * reaches (parents in b->parent), or -1 when the goal room is walled off. */
 static int astar(bot_state *b, int src)
 {
-    int cells = b->n * b->n, counter = 0;
+    int cells = b->map.n * b->map.n, counter = 0;
     for (int c = 0; c < cells; c++) {
         b->g[c] = NOT_REACHED;
         b->parent[c] = -1;
@@ -248,7 +212,7 @@ static int astar(bot_state *b, int src)
             return c;
         for (int d = 0; d < 4; d++) { /* up, right, down, left */
             int m = neighbour(b, c, d), score = b->g[c] + 1;
-            if (m < 0 || edge(b, c, d) == WALL || b->set[m] == CLOSED)
+            if (m < 0 || edge(b, c, d) == MM_WALL || b->set[m] == CLOSED)
                 continue;
             if (b->set[m] == UNSEEN) {
                 b->set[m] = ACTIVE;
@@ -268,8 +232,8 @@ static int astar(bot_state *b, int src)
 /* The answer that moves the robot one cell in direction d (or looks first). */
 static mb_answer one_cell(const bot_state *b, int d)
 {
-    int here = cell(b, b->x, b->y), rel = (d - b->heading + 4) & 3;
-    if (edge(b, here, d) != OPEN)
+    int here = mm_cell(&b->map, b->pose.x, b->pose.y), rel = (d - b->pose.heading + 4) & 3;
+    if (edge(b, here, d) != MM_OPEN)
         return mb_move(90, 0); /* the unsensed side behind the robot: turn to look */
     if (rel == 2)
         return mb_move(0, -1);
@@ -286,7 +250,7 @@ static int direction(const bot_state *b, int from, int to)
 
 static mb_answer explore(bot_state *b)
 {
-    int here = cell(b, b->x, b->y);
+    int here = mm_cell(&b->map, b->pose.x, b->pose.y);
 
     if (b->phase == RESET_NEXT)
         return mb_reset();
@@ -300,7 +264,7 @@ static mb_answer explore(bot_state *b)
         b->phase = RESET_NEXT;
         for (int d = 0; d < 4; d++) {
             int m = neighbour(b, here, d);
-            if (m < 0 || edge(b, here, d) == WALL)
+            if (m < 0 || edge(b, here, d) == MM_WALL)
                 continue;
             int t = 1 + heuristic(b, m);
             if (best < 0 || t < bt) { /* same T means same H here */
@@ -321,7 +285,7 @@ static mb_answer explore(bot_state *b)
     }
     if (goal == here) { /* only for n = 2: the start is a goal cell, not yet entered */
         for (int d = 0; d < 4; d++)
-            if (edge(b, here, d) == OPEN)
+            if (edge(b, here, d) == MM_OPEN)
                 return one_cell(b, d);
         return mb_move(90, 0);
     }
@@ -336,7 +300,7 @@ static mb_answer explore(bot_state *b)
 /* Plans run 1 from (0,0) facing up. Returns 0 if the goal is out of reach. */
 static int plan_run1(bot_state *b)
 {
-    int cells = b->n * b->n, start = cell(b, 0, 0), goal = -1;
+    int cells = b->map.n * b->map.n, start = mm_cell(&b->map, 0, 0), goal = -1;
     long long unit = 3LL * cells + 1; /* cost = steps * unit + cells travelled */
 
     b->plan_len = b->plan_pos = 0;
@@ -363,7 +327,7 @@ static int plan_run1(bot_state *b)
             int m = c;
             for (int len = 1; len <= 3; len++) {
                 int next = neighbour(b, m, d);
-                if (next < 0 || edge(b, m, d) != OPEN)
+                if (next < 0 || edge(b, m, d) != MM_OPEN)
                     break;
                 m = next;
                 long long nk = k + unit + len;
@@ -382,7 +346,7 @@ static int plan_run1(bot_state *b)
     for (int c = goal; c != start; c = b->parent[c])
         b->plan_mov[len++] = c;
     /* reverse it into (rotation, movement) answers, the robot facing up */
-    int heading = UP, prev = start;
+    int heading = MM_UP, prev = start;
     for (int i = 0; i < len / 2; i++) {
         int t = b->plan_mov[i];
         b->plan_mov[i] = b->plan_mov[len - 1 - i];
@@ -390,8 +354,8 @@ static int plan_run1(bot_state *b)
     }
     for (int i = 0; i < len; i++) {
         int c = b->plan_mov[i];
-        int x0 = prev / b->n, y0 = prev % b->n, x1 = c / b->n, y1 = c % b->n;
-        int d = x1 > x0 ? RIGHT : x1 < x0 ? LEFT : y1 > y0 ? UP : DOWN;
+        int x0 = prev / b->map.n, y0 = prev % b->map.n, x1 = c / b->map.n, y1 = c % b->map.n;
+        int d = x1 > x0 ? MM_RIGHT : x1 < x0 ? MM_LEFT : y1 > y0 ? MM_UP : MM_DOWN;
         int k = abs(x1 - x0) + abs(y1 - y0), rel = (d - heading + 4) & 3;
         if (rel == 2) {
             b->plan_rot[i] = 0;
@@ -416,7 +380,6 @@ static void start(void *user, const mb_start_info *info)
     memset(b, 0, sizeof *b);
     if (n >= 2 && n <= MAX_DIM) {
         size_t cells = (size_t)n * (size_t)n;
-        b->edges = calloc(cells * 4, 1);
         b->g = malloc(cells * sizeof *b->g);
         b->parent = malloc(cells * sizeof *b->parent);
         b->set = malloc(cells);
@@ -426,33 +389,19 @@ static void start(void *user, const mb_start_info *info)
         b->h.val = malloc(cells * 13 * sizeof *b->h.val);
         b->plan_rot = malloc(cells * sizeof *b->plan_rot);
         b->plan_mov = malloc(cells * sizeof *b->plan_mov);
-        if (b->edges && b->g && b->parent && b->set && b->order && b->cost && b->h.key &&
-            b->h.val && b->plan_rot && b->plan_mov)
-            b->n = n;
-        else
+        if (!(b->g && b->parent && b->set && b->order && b->cost && b->h.key && b->h.val &&
+              b->plan_rot && b->plan_mov && mm_map_init(&b->map, n)))
             fprintf(stderr, "seed004_astar: out of memory for a %dx%d maze\n", n, n);
     } else {
         fprintf(stderr, "seed004_astar: cannot map a %dx%d maze; turning on the spot\n", n, n);
     }
-    for (int i = 0; i < b->n; i++) {
-        set_edge(b, i, 0, DOWN, WALL);
-        set_edge(b, i, b->n - 1, UP, WALL);
-        set_edge(b, 0, i, LEFT, WALL);
-        set_edge(b, b->n - 1, i, RIGHT, WALL);
-    }
-    b->heading = UP;
+    b->pose.heading = MM_UP;
 }
 
 static void apply(bot_state *b, mb_answer a)
 {
-    /* dead reckoning; exact because moves only cross edges known to be open */
-    if (a.reset)
-        return;
-    b->heading = (b->heading + a.rotation / 90 + 4) & 3;
-    int d = a.movement >= 0 ? b->heading : (b->heading + 2) & 3;
-    b->x += DX[d] * abs(a.movement);
-    b->y += DY[d] * abs(a.movement);
-    if (a.movement != 0)
+    mm_apply(&b->pose, a); /* exact: moves only cross edges known to be open */
+    if (!a.reset && a.movement != 0)
         b->moved = 1;
 }
 
@@ -461,17 +410,17 @@ static mb_answer next_move(void *user, const int sensors[3], int run, int step)
     bot_state *b = user;
     mb_answer a;
     (void)step;
-    if (b->n == 0)
+    if (b->map.n == 0)
         return mb_move(90, 0);
     if (run != b->run) { /* the reset was accepted: back at the start, facing up */
         b->run = run;
-        b->x = b->y = 0;
-        b->heading = UP;
+        b->pose.x = b->pose.y = 0;
+        b->pose.heading = MM_UP;
         b->moved = 0;
         if (!plan_run1(b))
             fprintf(stderr, "seed004_astar: no path for run 1\n");
     }
-    sense(b, sensors);
+    mm_sense(&b->map, &b->pose, sensors);
     if (run == 0) {
         a = explore(b);
     } else if (b->plan_pos < b->plan_len) {
