@@ -59,10 +59,8 @@ from collections import deque
 sys.dont_write_bytecode = True  # leave no __pycache__ in the bot's folder
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mazebot  # noqa: E402
-
-UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
-DELTA = ((0, 1), (1, 0), (0, -1), (-1, 0))
-UNKNOWN, OPEN, WALL = None, True, False
+import mazemap  # noqa: E402
+from mazemap import UP, DELTA, UNKNOWN, OPEN  # noqa: E402
 MARK = 1000  # the report's value for a dead cell
 
 RANDOM_RUN1 = False     # True: the benchmark exactly as described (random run 1)
@@ -73,15 +71,9 @@ class RandomExplorer:
     def start(self, maze_dim, seed, max_steps):
         n = self.n = maze_dim
         self.rng = random.Random(seed if seed is not None else 0)
-        self.edges = [[[UNKNOWN] * 4 for _ in range(n)] for _ in range(n)]
-        for i in range(n):  # the outer walls
-            self._set(i, 0, DOWN, WALL)
-            self._set(i, n - 1, UP, WALL)
-            self._set(0, i, LEFT, WALL)
-            self._set(n - 1, i, RIGHT, WALL)
+        self.edges = mazemap.new_edges(n)  # the outer walls are known
         self.score = [[0] * n for _ in range(n)]  # MARK for dead cells
-        g = (n // 2 - 1, n // 2)
-        self.goal = {(x, y) for x in g for y in g}
+        self.goal = mazemap.goal_room(n)
         self.hit_goal = False
         self.run = 0
         self.route = None
@@ -90,21 +82,11 @@ class RandomExplorer:
     def _home(self):
         self.x, self.y, self.heading = 0, 0, UP
 
-    def _inside(self, x, y):
-        return 0 <= x < self.n and 0 <= y < self.n
-
-    def _set(self, x, y, d, state):
-        self.edges[x][y][d] = state
-        nx, ny = x + DELTA[d][0], y + DELTA[d][1]
-        if self._inside(nx, ny):
-            self.edges[nx][ny][(d + 2) % 4] = state
-
     def _dead(self, x, y):
         return self.score[x][y] == MARK
 
     def _sense(self, sensors):
-        for rel, dist in zip((-1, 0, 1), sensors):
-            self._set(self.x, self.y, (self.heading + rel) % 4, OPEN if dist > 0 else WALL)
+        mazemap.sense_cell(self.edges, self.x, self.y, self.heading, sensors)
 
     def _live_ways(self, x, y):
         """Directions of the open sides of (x, y) that lead to unmarked cells."""
@@ -157,32 +139,7 @@ class RandomExplorer:
     # --- additions (see the header) -----------------------------------------------------
     def _seek_goal(self):
         """Heads for the goal room: fewest cells, unknown sides counted as open."""
-        dist = {c: 0 for c in self.goal}
-        queue = deque(sorted(self.goal))
-        while queue:
-            x, y = queue.popleft()
-            for d in range(4):
-                if self.edges[x][y][d] is WALL:
-                    continue
-                nxt = (x + DELTA[d][0], y + DELTA[d][1])
-                if self._inside(*nxt) and nxt not in dist:
-                    dist[nxt] = dist[(x, y)] + 1
-                    queue.append(nxt)
-        if (self.x, self.y) not in dist:
-            return None  # the goal cannot be reached: keep exploring
-        best = None
-        for rel in (0, -1, 1, 2):  # forward, left, right, back
-            d = (self.heading + rel) % 4
-            nxt = (self.x + DELTA[d][0], self.y + DELTA[d][1])
-            if self.edges[self.x][self.y][d] is not WALL and nxt in dist \
-                    and (best is None or dist[nxt] < best[0]):
-                best = (dist[nxt], rel, d)
-        if best is None:
-            return None  # walled in
-        _, rel, d = best
-        if self.edges[self.x][self.y][d] is UNKNOWN:
-            return 90, 0  # the side behind was never sensed: turn and look
-        return (0, -1) if rel == 2 else (rel * 90, 1)
+        return mazemap.seek_goal_move(self.edges, self.goal, self.x, self.y, self.heading)
 
     def _shortest_route(self):
         """Fewest moves (straight, 1-3 cells over known-open sides) to the goal room."""
@@ -209,12 +166,6 @@ class RandomExplorer:
                         queue.append((x, y))
         return None
 
-    def _route_move(self, d, cells):
-        rel = (d - self.heading) % 4
-        if rel == 2:
-            return 0, -cells
-        return {0: 0, 1: 90, 3: -90}[rel], cells
-
     # --- the bot interface -----------------------------------------------------------------
     def next_move(self, sensors, run, step):
         if run != self.run:  # the reset was accepted: back at the start
@@ -232,7 +183,7 @@ class RandomExplorer:
             if self.route is None:
                 self.route = self._shortest_route() or []
             if self.route:
-                move = self._route_move(*self.route.pop(0))
+                move = mazemap.move_towards(self.heading, *self.route.pop(0))
         if move is None:
             move = self._random_move(sensors)
         self._apply(*move)
@@ -246,7 +197,8 @@ class RandomExplorer:
         d = self.heading if movement >= 0 else (self.heading + 2) % 4
         for _ in range(abs(movement)):
             if self.edges[self.x][self.y][d] is not OPEN:
-                self._set(self.x, self.y, d, OPEN)  # the move crossed it: it is open
+                # The move crossed it: it is open.
+                mazemap.set_edge(self.edges, self.x, self.y, d, OPEN)
             self.x += DELTA[d][0]
             self.y += DELTA[d][1]
 

@@ -84,11 +84,10 @@ import sys
 sys.dont_write_bytecode = True  # leave no __pycache__ in the bot's folder
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mazebot  # noqa: E402
+import mazemap  # noqa: E402
+from mazemap import UP, RIGHT, DOWN, LEFT, DELTA, UNKNOWN, OPEN, WALL  # noqa: E402
 
-UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
-DELTA = ((0, 1), (1, 0), (0, -1), (-1, 0))
 LETTER = {'u': UP, 'r': RIGHT, 'd': DOWN, 'l': LEFT}
-UNKNOWN, OPEN, WALL = None, True, False
 
 ROTATE_COST = 3
 NO_ROTATE_COST = 1
@@ -102,14 +101,8 @@ PRECEDENCE_GOAL = {1: 'rudl', 2: 'rdul', 3: 'ulrd', 4: 'ludr'}
 class SmartMapBot:
     def start(self, maze_dim, seed, max_steps):
         n = self.n = maze_dim
-        self.edges = [[[UNKNOWN] * 4 for _ in range(n)] for _ in range(n)]
-        for i in range(n):
-            self._set(i, 0, DOWN, WALL)
-            self._set(i, n - 1, UP, WALL)
-            self._set(0, i, LEFT, WALL)
-            self._set(n - 1, i, RIGHT, WALL)
-        g = (n // 2 - 1, n // 2)
-        self.goal = {(x, y) for x in g for y in g}
+        self.edges = mazemap.new_edges(n)  # the outer walls are known
+        self.goal = mazemap.goal_room(n)
         self.count_map = [[0] * n for _ in range(n)]
         self.run = 0
         self.goal_found = False
@@ -120,15 +113,6 @@ class SmartMapBot:
         self.x, self.y, self.heading = 0, 0, UP
 
     # --- map (update_map2) ---------------------------------------------------
-    def _inside(self, x, y):
-        return 0 <= x < self.n and 0 <= y < self.n
-
-    def _set(self, x, y, d, state):
-        self.edges[x][y][d] = state
-        dx, dy = DELTA[d]
-        if self._inside(x + dx, y + dy):
-            self.edges[x + dx][y + dy][(d + 2) % 4] = state
-
     def _update_map2(self, sensors):
         """Each sensor ray maps every cell it passes: d open sides, then a wall
         (which the cell on its other side shares)."""
@@ -136,11 +120,11 @@ class SmartMapBot:
             d = (self.heading + rel) % 4
             x, y = self.x, self.y
             for _ in range(dist):
-                if not self._inside(x + DELTA[d][0], y + DELTA[d][1]):
+                if not mazemap.inside(self.n, x + DELTA[d][0], y + DELTA[d][1]):
                     break  # cannot happen on a valid maze; never index outside
-                self._set(x, y, d, OPEN)
+                mazemap.set_edge(self.edges, x, y, d, OPEN)
                 x, y = x + DELTA[d][0], y + DELTA[d][1]
-            self._set(x, y, d, WALL)
+            mazemap.set_edge(self.edges, x, y, d, WALL)
 
     def _mapped(self, x, y):
         """How many of the cell's 4 movement directions are mapped (open or wall)."""
@@ -230,14 +214,7 @@ class SmartMapBot:
         return None
 
     def _step_towards(self, d, cells):
-        rel = (d - self.heading) % 4
-        if rel == 0:
-            return 0, cells
-        if rel == 1:
-            return 90, cells
-        if rel == 3:
-            return -90, cells
-        return 0, -cells  # behind: move backward
+        return mazemap.move_towards(self.heading, d, cells)  # behind: move backward
 
     # --- exploit(): a_star_search1 + route_plan --------------------------------
     def _a_star(self):
@@ -316,10 +293,8 @@ class SmartMapBot:
 
     def _apply(self, rotation, movement):
         """Dead reckoning; exact because moves only cross sides known to be open."""
-        self.heading = (self.heading + rotation // 90) % 4
-        d = self.heading if movement >= 0 else (self.heading + 2) % 4
-        self.x += DELTA[d][0] * abs(movement)
-        self.y += DELTA[d][1] * abs(movement)
+        self.x, self.y, self.heading = mazemap.apply_move(
+            self.x, self.y, self.heading, rotation, movement)
 
     def end(self, message):
         print("seed000_smart_map: %s" % (message,))

@@ -74,10 +74,8 @@ from collections import deque
 sys.dont_write_bytecode = True  # leave no __pycache__ in the bot's folder
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mazebot  # noqa: E402
-
-UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
-DELTA = ((0, 1), (1, 0), (0, -1), (-1, 0))
-UNKNOWN, OPEN, WALL = None, True, False
+import mazemap  # noqa: E402
+from mazemap import UP, DOWN, LEFT, RIGHT, DELTA, OPEN, WALL  # noqa: E402
 
 FORCED_RESET_STEP = 950
 SEEK_GOAL_STEP = 800  # not in the report: see "Additions" in the header
@@ -87,17 +85,12 @@ class RandomDfsBot:
     def start(self, maze_dim, seed, max_steps):
         n = self.n = maze_dim
         self.rng = random.Random(seed if seed is not None else 0)
-        # val_grid: the sides of every visited cell (UNKNOWN until visited).
-        self.edges = [[[UNKNOWN] * 4 for _ in range(n)] for _ in range(n)]
-        for i in range(n):  # the outer walls
-            self._set(i, 0, DOWN, WALL)
-            self._set(i, n - 1, UP, WALL)
-            self._set(0, i, LEFT, WALL)
-            self._set(n - 1, i, RIGHT, WALL)
+        # val_grid: the sides of every visited cell (UNKNOWN until visited);
+        # the outer walls are known from the start.
+        self.edges = mazemap.new_edges(n)
         self.visited = [[False] * n for _ in range(n)]
         self.unique = 0
-        g = (n // 2 - 1, n // 2)
-        self.goal = {(x, y) for x in g for y in g}
+        self.goal = mazemap.goal_room(n)
         self.found_goal = False
         self.run = 0
         self.route = None
@@ -106,20 +99,9 @@ class RandomDfsBot:
     def _home(self):
         self.x, self.y, self.heading = 0, 0, UP
 
-    def _inside(self, x, y):
-        return 0 <= x < self.n and 0 <= y < self.n
-
-    def _set(self, x, y, d, state):
-        self.edges[x][y][d] = state
-        nx, ny = x + DELTA[d][0], y + DELTA[d][1]
-        if self._inside(nx, ny):
-            self.edges[nx][ny][(d + 2) % 4] = state
-
     # --- cellValue() / count_cell() ----------------------------------------------
     def _cell_value(self, sensors):
-        for rel, dist in zip((-1, 0, 1), sensors):
-            d = (self.heading + rel) % 4
-            self._set(self.x, self.y, d, OPEN if dist > 0 else WALL)
+        mazemap.sense_cell(self.edges, self.x, self.y, self.heading, sensors)
 
     def _count_cell(self):
         if not self.visited[self.x][self.y]:
@@ -149,32 +131,7 @@ class RandomDfsBot:
 
     def _seek_goal(self):
         """Not in the report: head for the goal room (unknown sides count as open)."""
-        dist = {c: 0 for c in self.goal}
-        queue = deque(sorted(self.goal))
-        while queue:
-            x, y = queue.popleft()
-            for d in range(4):
-                if self.edges[x][y][d] is WALL:
-                    continue
-                nxt = (x + DELTA[d][0], y + DELTA[d][1])
-                if self._inside(*nxt) and nxt not in dist:
-                    dist[nxt] = dist[(x, y)] + 1
-                    queue.append(nxt)
-        if (self.x, self.y) not in dist:
-            return None  # the goal cannot be reached: keep exploring
-        best = None
-        for rel in (0, -1, 1, 2):  # forward, left, right, back
-            d = (self.heading + rel) % 4
-            nxt = (self.x + DELTA[d][0], self.y + DELTA[d][1])
-            if self.edges[self.x][self.y][d] is not WALL and nxt in dist \
-                    and (best is None or dist[nxt] < best[0]):
-                best = (dist[nxt], rel, d)
-        if best is None:
-            return None  # walled in
-        _, rel, d = best
-        if self.edges[self.x][self.y][d] is UNKNOWN:
-            return 90, 0  # the side behind was never sensed: turn and look
-        return (0, -1) if rel == 2 else (rel * 90, 1)
+        return mazemap.seek_goal_move(self.edges, self.goal, self.x, self.y, self.heading)
 
     def _flood_fill(self):
         """Weights = fewest 1-3-cell straight moves from the start over visited cells."""
@@ -212,12 +169,6 @@ class RandomDfsBot:
         segments.reverse()
         return segments
 
-    def _move(self, d, cells):
-        rel = (d - self.heading) % 4
-        if rel == 2:
-            return 0, -cells  # never needed on a shortest path; kept safe
-        return {0: 0, 1: 90, 3: -90}[rel], cells
-
     # --- the bot interface -----------------------------------------------------------
     def next_move(self, sensors, run, step):
         if run != self.run:  # the reset was accepted: back at the start
@@ -237,7 +188,7 @@ class RandomDfsBot:
             if self.route is None:
                 self.route = self._flood_fill() or []
             if self.route:
-                move = self._move(*self.route.pop(0))
+                move = mazemap.move_towards(self.heading, *self.route.pop(0))
             else:  # cannot happen after an accepted reset; stay safe anyway
                 move = self._explore(sensors)
         self._apply(*move)
@@ -247,10 +198,8 @@ class RandomDfsBot:
 
     def _apply(self, rotation, movement):
         """Dead reckoning; exact because moves only cross sides known to be open."""
-        self.heading = (self.heading + rotation // 90) % 4
-        d = self.heading if movement >= 0 else (self.heading + 2) % 4
-        self.x += DELTA[d][0] * abs(movement)
-        self.y += DELTA[d][1] * abs(movement)
+        self.x, self.y, self.heading = mazemap.apply_move(
+            self.x, self.y, self.heading, rotation, movement)
 
     def end(self, message):
         print("seed002_random_dfs: %s" % (message,))

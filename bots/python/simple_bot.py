@@ -91,6 +91,8 @@ class SimpleBot:
 
     def _explore_move(self):
         dist = self._flood()
+        if (self.x, self.y) not in dist:
+            return 90, 0  # the goal room cannot be reached: turn in place until the end
         here = dist[(self.x, self.y)]
         for rel in (0, -1, 1, 2):  # straight, left, right, back
             d = (self.heading + rel) % 4

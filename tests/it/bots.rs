@@ -168,3 +168,23 @@ fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
     // Far better than the fewest-step optimum plus a full 1000-step exploration.
     assert!(standing["mean_ratio"].as_f64().unwrap() < 1.5, "{standing}");
 }
+
+#[test]
+fn no_bot_crashes_on_a_maze_whose_goal_cannot_be_reached() {
+    let maze = shared_maze("micromouseonline/classic/001-anomaly-test.txt");
+    let mut played = 0;
+    for kit in available_kits() {
+        let dir = root().join("bots").join(kit);
+        match kit {
+            "rust" => build(&dir, &["cargo", "build", "--release", "--quiet"]),
+            "c" => build(&dir, &["make", "-s"]),
+            _ => {}
+        }
+        for bot in mazearena::manifest::load(&dir).unwrap() {
+            let v = run_json(maze.to_str().unwrap(), &bot.command, &bot.dir);
+            assert_eq!(v["status"], "step_limit", "{}: {v}", bot.name);
+            played += 1;
+        }
+    }
+    assert!(played >= 4);
+}
