@@ -110,8 +110,10 @@ pub struct ReplayView {
     pub maze_id: i64,
     /// Side.
     pub maze_dim: i64,
-    /// The maze's canonical numeric text.
-    pub maze_layout: String,
+    /// The maze's canonical numeric text (omitted for a hidden maze unless the caller is
+    /// the admin: a hidden maze's layout is never served to anyone else).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maze_layout: Option<String>,
     /// Every step: run, step, sensors, action, event, position, heading, warnings, answer_us.
     #[schema(value_type = Vec<Object>)]
     pub trace: Value,
@@ -250,7 +252,7 @@ async fn get_match_replay(
         status: row.status,
         maze_id: maze.maze_id,
         maze_dim: maze.dim,
-        maze_layout: maze.layout,
+        maze_layout: (!maze.hidden || caller.is_admin()).then_some(maze.layout),
         trace: serde_json::from_str(&trace).unwrap_or(Value::Array(vec![])),
     }))
 }
