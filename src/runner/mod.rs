@@ -1,7 +1,7 @@
 //! The bot runner: plays one match between one bot process and one maze.
 //!
 //! [`run_match`] starts the bot (see [`process`]), speaks protocol v1 with it under the
-//! time limits, drives the pure [`Game`](crate::engine::Game), and always returns a
+//! time limits, drives the pure [`Game`], and always returns a
 //! [`MatchRecord`]: a misbehaving bot is an outcome recorded with its reason, never an
 //! error or a panic. Matches are plain futures, so many can run at once in one process.
 
