@@ -2,6 +2,7 @@
 //! engine and the runner.
 
 mod maze;
+mod report;
 mod run;
 mod serve;
 mod tournament;
