@@ -317,14 +317,12 @@ impl Game {
                 }
             }
             Action::Move { rotation, movement } => {
-                self.heading = match rotation {
-                    -90 => self.heading.counter_clockwise(),
-                    0 => self.heading,
-                    90 => self.heading.clockwise(),
-                    other => {
+                self.heading = match self.heading.rotated(rotation) {
+                    Some(h) => h,
+                    None => {
                         warnings.push(self.warning(
                             WarningKind::InvalidRotation,
-                            format!("invalid rotation {other}: no rotation performed"),
+                            format!("invalid rotation {rotation}: no rotation performed"),
                         ));
                         self.heading
                     }

@@ -58,6 +58,17 @@ impl Heading {
         Heading::from_index(self.index() + 3)
     }
 
+    /// The heading after a rotation of -90, 0 or 90 degrees; `None` for any other value
+    /// (RULES.md: an invalid rotation means no rotation, with a warning).
+    pub const fn rotated(self, rotation: i64) -> Option<Heading> {
+        match rotation {
+            -90 => Some(self.counter_clockwise()),
+            0 => Some(self),
+            90 => Some(self.clockwise()),
+            _ => None,
+        }
+    }
+
     /// The opposite heading.
     pub const fn reverse(self) -> Heading {
         Heading::from_index(self.index() + 2)
@@ -137,6 +148,10 @@ mod tests {
         }
         assert_eq!(Heading::Up.clockwise(), Heading::Right);
         assert_eq!(Heading::Up.counter_clockwise(), Heading::Left);
+        assert_eq!(Heading::Up.rotated(90), Some(Heading::Right));
+        assert_eq!(Heading::Up.rotated(-90), Some(Heading::Left));
+        assert_eq!(Heading::Up.rotated(0), Some(Heading::Up));
+        assert_eq!(Heading::Up.rotated(180), None);
     }
 
     #[test]

@@ -38,12 +38,10 @@ pub fn solve(maze: &Maze) -> Option<Solution> {
     let mut found = None;
     'search: while let Some((cell, heading)) = queue.pop_front() {
         let from = index(cell, heading);
-        for rotation in [0i64, 90, -90] {
-            let h = match rotation {
-                90 => heading.clockwise(),
-                -90 => heading.counter_clockwise(),
-                _ => heading,
-            };
+        for (rotation, h) in [0i64, 90, -90]
+            .into_iter()
+            .filter_map(|r| heading.rotated(r).map(|h| (r, h)))
+        {
             for movement in [3i64, 2, 1, 0, -1, -2, -3] {
                 let (end, _) = slide(maze, cell, h, movement);
                 let to = index(end, h);

@@ -204,16 +204,7 @@ impl Map {
         movement: i32,
         mode: Mode,
     ) -> Option<(Pose, u32)> {
-        let heading = match rotation {
-            90 => (pose.heading + 1) % 4,
-            -90 => (pose.heading + 3) % 4,
-            _ => pose.heading,
-        };
-        let dir = if movement >= 0 {
-            heading
-        } else {
-            (heading + 2) % 4
-        };
+        let (heading, dir) = turn_and_direction(pose.heading, rotation, movement);
         let (mut x, mut y) = (pose.x, pose.y);
         let mut unknown = 0;
         for _ in 0..movement.unsigned_abs() {
@@ -315,16 +306,7 @@ impl Map {
         let mut unknown_edges = Vec::new();
         let mut pose = from;
         for (&(rotation, movement), &next) in actions.iter().zip(&poses) {
-            let heading = match rotation {
-                90 => (pose.heading + 1) % 4,
-                -90 => (pose.heading + 3) % 4,
-                _ => pose.heading,
-            };
-            let dir = if movement >= 0 {
-                heading
-            } else {
-                (heading + 2) % 4
-            };
+            let (_, dir) = turn_and_direction(pose.heading, rotation, movement);
             let (mut x, mut y) = (pose.x, pose.y);
             for _ in 0..movement.unsigned_abs() {
                 if self.edge(x, y, dir) == Edge::Unknown {
@@ -344,6 +326,22 @@ impl Map {
             unknown_edges,
         }
     }
+}
+
+/// The heading after `rotation` (-90, 0 or 90; anything else: no turn) and the
+/// direction `movement` then travels in (backwards when negative).
+fn turn_and_direction(heading: usize, rotation: i32, movement: i32) -> (usize, usize) {
+    let heading = match rotation {
+        90 => (heading + 1) % 4,
+        -90 => (heading + 3) % 4,
+        _ => heading,
+    };
+    let dir = if movement >= 0 {
+        heading
+    } else {
+        (heading + 2) % 4
+    };
+    (heading, dir)
 }
 
 #[cfg(test)]
