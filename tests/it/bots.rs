@@ -1,6 +1,7 @@
 //! The reference bots in bots/: each starter kit's minimal bot plays a real match,
 //! every manifest works with `mazearena tournament` and finishes the classic mazes, and
-//! the champion finishes every contest maze whose goal room can be reached.
+//! the champion finishes every contest maze whose goal room can be reached, and the Rust
+//! kit's own tests and in-process champion study agree with the referee.
 
 use std::path::Path;
 use std::process::Command;
@@ -167,6 +168,60 @@ fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
     assert_eq!(standing["finish_rate"], 1.0, "{standing}");
     // Far better than the fewest-step optimum plus a full 1000-step exploration.
     assert!(standing["mean_ratio"].as_f64().unwrap() < 1.5, "{standing}");
+}
+
+#[test]
+fn the_rust_kits_tests_pass_and_the_champion_study_plays_like_the_referee() {
+    if !have("cargo") {
+        eprintln!("SKIPPED the Rust kit's tests: cargo is not installed");
+        return;
+    }
+    let kit = root().join("bots/rust");
+    build(&kit, &["cargo", "test", "--release", "--quiet"]);
+    build(
+        &kit,
+        &[
+            "cargo",
+            "build",
+            "--release",
+            "--quiet",
+            "--examples",
+            "--bins",
+        ],
+    );
+    let study = kit.join("target/release/examples/champion_study");
+    let champion = kit.join("target/release/champion");
+    for n in 1..=3 {
+        let maze = shared_maze(&format!("classic/test_maze_0{n}.txt"));
+        let maze = maze.to_str().unwrap();
+        let out = Command::new(&study)
+            .args(["--verbose", maze])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text.lines().next().unwrap();
+        let field = |name: &str| -> u64 {
+            let at = line
+                .find(name)
+                .unwrap_or_else(|| panic!("{name} in {line}"))
+                + name.len();
+            let digits: String = line[at..]
+                .chars()
+                .take_while(char::is_ascii_digit)
+                .collect();
+            digits.parse().unwrap()
+        };
+        // The same game through the real referee and protocol.
+        let v = run_json(maze, champion.to_str().unwrap(), &kit);
+        assert_eq!(v["status"], "finished");
+        assert_eq!(v["run0_steps"], field("run 0 "), "{line}");
+        assert_eq!(v["run1_steps"], field("run 1 "), "{line}");
+    }
 }
 
 #[test]
