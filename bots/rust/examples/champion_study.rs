@@ -22,7 +22,7 @@
 //! - `--likely-weight W`, `--gain-weight W`: override the champion's weights.
 
 use mazebot::champion::{Champion, Params};
-use mazebot::map::{Edge, Map, Mode, Pose};
+use mazebot::map::{turn_and_direction, Edge, Map, Mode, Pose};
 use mazebot::protocol::{Answer, Bot, Start};
 
 /// What one game came to.
@@ -112,7 +112,7 @@ fn main() {
             println!("{file}: the goal room cannot be reached; skipped");
             continue;
         };
-        let game = play(&maze, params);
+        let game = play(&maze, optimum, params);
         played += 1;
         let target = targets
             .get(i)
@@ -161,6 +161,7 @@ fn study_ties(maze: &Map, params: Params, optimum: u32, seeds: u64, target: Opti
     for seed in 1..=seeds {
         let game = play(
             maze,
+            optimum,
             Params {
                 tie_jitter: Some(seed),
                 ..params
@@ -192,8 +193,9 @@ fn show(n: Option<u32>) -> String {
     n.map_or_else(|| "-".to_string(), |n| n.to_string())
 }
 
-/// Plays one game of the champion on `maze` under the task's rules.
-fn play(maze: &Map, params: Params) -> Game {
+/// Plays one game of the champion on `maze` (whose fewest-step run is `optimum`) under
+/// the task's rules.
+fn play(maze: &Map, optimum: u32, params: Params) -> Game {
     const MAX_STEPS: u32 = 1000;
     let mut bot = Champion::new(params).quiet();
     bot.start(&Start {
@@ -202,9 +204,6 @@ fn play(maze: &Map, params: Params) -> Game {
         seed: 0,
         move_timeout_ms: 1000,
     });
-    let optimum = maze
-        .plan(Pose::START, |x, y| maze.is_goal(x, y), Mode::Known, false)
-        .map(|p| p.steps);
     let mut game = Game {
         finished: false,
         run0: 0,
@@ -232,11 +231,11 @@ fn play(maze: &Map, params: Params) -> Game {
                 visited_goal = true;
                 game.arrival = Some(step);
             }
-            if visited_goal && game.proven_optimum_at.is_none() {
-                let proven = bot.proven_plan().map(|p| p.steps);
-                if proven.is_some() && proven <= optimum {
-                    game.proven_optimum_at = Some(step);
-                }
+            if visited_goal
+                && game.proven_optimum_at.is_none()
+                && bot.proven_plan().is_some_and(|p| p.steps <= optimum)
+            {
+                game.proven_optimum_at = Some(step);
             }
         } else if maze.is_goal(pose.x, pose.y) {
             game.finished = true;
@@ -265,16 +264,7 @@ fn sensors(maze: &Map, pose: Pose) -> [u32; 3] {
 
 /// Rotate, then move cell by cell, stopping at a wall.
 fn referee_move(maze: &Map, pose: Pose, rotation: i32, movement: i32) -> Pose {
-    let heading = match rotation {
-        90 => (pose.heading + 1) % 4,
-        -90 => (pose.heading + 3) % 4,
-        _ => pose.heading,
-    };
-    let dir = if movement >= 0 {
-        heading
-    } else {
-        (heading + 2) % 4
-    };
+    let (heading, dir) = turn_and_direction(pose.heading, rotation, movement);
     let (mut x, mut y) = (pose.x, pose.y);
     for _ in 0..movement.clamp(-3, 3).unsigned_abs() {
         if maze.edge(x, y, dir) != Edge::Open {

@@ -380,7 +380,7 @@ impl Map {
 
 /// The heading after `rotation` (-90, 0 or 90; anything else: no turn) and the
 /// direction `movement` then travels in (backwards when negative).
-fn turn_and_direction(heading: usize, rotation: i32, movement: i32) -> (usize, usize) {
+pub fn turn_and_direction(heading: usize, rotation: i32, movement: i32) -> (usize, usize) {
     let heading = match rotation {
         90 => (heading + 1) % 4,
         -90 => (heading + 3) % 4,
