@@ -5,7 +5,8 @@
 //! ways: open (the optimistic plan, the best the maze could still allow), closed (the
 //! proven plan, sure to work), and open at a price (the likely plan, where each unknown
 //! edge costs a fraction of a step because it may be a wall). Plans that may guess
-//! assume that the goal room has one entrance ([`Map::with_one_goal_entrance`]).
+//! assume two rules of micromouse mazes ([`Map::with_maze_rules`]): the goal room has one
+//! entrance, and every post but the centre one touches a wall.
 //!
 //! - Run 0, before the goal room: follow the optimistic fewest-step plan from where the
 //!   robot stands, re-planned after every reading; ties go to plans through known ground.
@@ -60,7 +61,7 @@ const JITTER_MILLI: u64 = 25;
 pub struct Champion {
     params: Params,
     map: Map,
-    /// `map` plus the one-entrance assumption, for plans that may guess.
+    /// `map` with the maze rules assumed, for plans that may guess.
     belief: Map,
     pose: Pose,
     max_steps: u32,
@@ -205,7 +206,7 @@ impl Bot for Champion {
 
     fn next_move(&mut self, sensors: [u32; 3], run: u8, step: u32) -> Answer {
         self.map.sense(self.pose, sensors);
-        self.belief = self.map.with_one_goal_entrance();
+        self.belief = self.map.with_maze_rules();
         let action = if run == 0 {
             match self.explore_step(step) {
                 Some(a) => Some(a),
