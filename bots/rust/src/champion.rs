@@ -66,7 +66,7 @@ pub struct Champion {
     pose: Pose,
     max_steps: u32,
     /// The run-0 step at which the robot first entered the goal room.
-    pub goal_entered_at: Option<u32>,
+    goal_entered_at: Option<u32>,
     /// Whether to log the goal and the reset on stderr.
     log: bool,
 }
@@ -89,11 +89,6 @@ impl Champion {
     pub fn quiet(mut self) -> Champion {
         self.log = false;
         self
-    }
-
-    /// What the robot has proven of the maze.
-    pub fn map(&self) -> &Map {
-        &self.map
     }
 
     /// The proven fewest-step plan from the start to the goal room.
