@@ -8,7 +8,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-use crate::support::{mazearena, root, shared_maze};
+use crate::support::{mazearena_json, root, shared_maze};
 
 /// Whether `program` runs on this machine.
 fn have(program: &str) -> bool {
@@ -47,7 +47,7 @@ fn build(dir: &Path, command: &[&str]) {
 }
 
 fn run_json(maze: &str, bot: &str, dir: &Path) -> Value {
-    let out = mazearena(&[
+    mazearena_json(&[
         "run",
         "--maze",
         maze,
@@ -56,13 +56,7 @@ fn run_json(maze: &str, bot: &str, dir: &Path) -> Value {
         "--bot-dir",
         dir.to_str().unwrap(),
         "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    ])
 }
 
 #[test]
@@ -110,13 +104,7 @@ fn every_manifest_finishes_the_classic_mazes_in_a_tournament() {
         &db,
         "--json",
     ]);
-    let out = mazearena(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = mazearena_json(&args);
     let matches = v["matches"].as_array().unwrap();
     let bots = v["standings"].as_array().unwrap().len();
     assert!(bots >= kits.len(), "every kit has at least one bot");
@@ -146,7 +134,7 @@ fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
     .unwrap();
     let db = format!("sqlite://{}", dir.path().join("c.db").display());
     let contest = shared_maze("micromouseonline/classic");
-    let out = mazearena(&[
+    let v = mazearena_json(&[
         "tournament",
         "--bots",
         manifest.to_str().unwrap(),
@@ -156,12 +144,6 @@ fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
         &db,
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     // 521 files: 2 have an unreachable goal room and 13 repeat another's layout.
     assert_eq!(v["total"], 506);
     let standing = &v["standings"][0];

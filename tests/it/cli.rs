@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use serde_json::Value;
 
-use crate::support::{mazearena, root, shared_maze};
+use crate::support::{mazearena, mazearena_json, root, shared_maze};
 
 fn classic_path(n: u32) -> String {
     shared_maze(&format!("classic/test_maze_0{n}.txt"))
@@ -381,9 +381,7 @@ fn generated_mazes_pass_strict_validation_and_are_reproducible() {
 #[test]
 fn solve_gives_the_reference_figures() {
     for (n, want) in [(1, 17), (2, 22), (3, 25)] {
-        let out = mazearena(&["maze", "solve", "--json", &classic_path(n)]);
-        assert!(out.status.success());
-        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        let v = mazearena_json(&["maze", "solve", "--json", &classic_path(n)]);
         assert_eq!(v["steps"], want);
         assert_eq!(v["actions"].as_array().unwrap().len(), want as usize);
     }
@@ -495,7 +493,7 @@ async fn a_local_tournament_writes_every_match_and_prints_standings() {
     )
     .unwrap();
     let db = format!("sqlite://{}", dir.path().join("t.db").display());
-    let out = mazearena(&[
+    let v = mazearena_json(&[
         "tournament",
         "--bots",
         simple_dir.to_str().unwrap(),
@@ -510,12 +508,6 @@ async fn a_local_tournament_writes_every_match_and_prints_standings() {
         &db,
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["total"], 12);
     assert_eq!(v["done"], 12);
     let standings = v["standings"].as_array().unwrap();

@@ -50,6 +50,18 @@ pub fn mazearena(args: &[&str]) -> Output {
         .expect("the mazearena binary runs")
 }
 
+/// Runs `mazearena` with `args`, which must succeed (else the test fails with its
+/// stderr), and parses its standard output as JSON.
+pub fn mazearena_json(args: &[&str]) -> serde_json::Value {
+    let out = mazearena(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 /// Processes (not zombies) that are still members of process group `pgid`.
 pub fn live_group_members(pgid: u32) -> Vec<u32> {
     let mut found = Vec::new();
