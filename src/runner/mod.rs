@@ -79,6 +79,9 @@ impl Limits {
             startup_timeout_ms: self.startup_timeout.map(|d| d.as_millis() as u64),
             move_timeout_ms: self.move_timeout.map(|d| d.as_millis() as u64),
             memory_limit_mb: self.memory_limit_mb,
+            process_limit: None,
+            scratch_mb: None,
+            sandbox: "none".to_string(),
         }
     }
 }
@@ -247,7 +250,11 @@ pub async fn run_match(
         };
         answer_total_us += answer_us;
         let report: StepReport = game.apply(action);
-        let step = TraceStep { report, answer_us };
+        let step = TraceStep {
+            report,
+            answer_us,
+            cpu_us: None,
+        };
         observe(&step);
         record.timings.max_answer_us = record.timings.max_answer_us.max(answer_us);
         record.trace.push(step);

@@ -19,6 +19,14 @@ pub enum MatchStatus {
     Crashed,
     /// The bot sent something that is not a valid answer.
     ProtocolError,
+    /// The bot's processes together held more resident memory than the match allows.
+    MemoryLimit,
+    /// The bot tried to run more processes or threads at once than the match allows.
+    ProcessLimit,
+    /// The bot filled its scratch area.
+    ScratchLimit,
+    /// The match was running each time the server died, more often than it is retried.
+    Aborted,
 }
 
 impl MatchStatus {
@@ -30,6 +38,10 @@ impl MatchStatus {
             MatchStatus::Timeout => "timeout",
             MatchStatus::Crashed => "crashed",
             MatchStatus::ProtocolError => "protocol_error",
+            MatchStatus::MemoryLimit => "memory_limit",
+            MatchStatus::ProcessLimit => "process_limit",
+            MatchStatus::ScratchLimit => "scratch_limit",
+            MatchStatus::Aborted => "aborted",
         }
     }
 }
@@ -54,6 +66,23 @@ pub struct Failure {
     /// The signal that ended the bot, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signal: Option<i32>,
+    /// The step the failure happened at (the step that was asked and not answered).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step: Option<u32>,
+    /// The limit that was hit, for the limit statuses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit: Option<LimitHit>,
+}
+
+/// A match limit that a bot went over: which one and its value.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LimitHit {
+    /// `memory`, `processes` or `scratch`.
+    pub name: String,
+    /// The limit's value, in `unit`.
+    pub value: u64,
+    /// `MiB` or `processes`.
+    pub unit: String,
 }
 
 /// The limits a match was played under.
@@ -65,8 +94,23 @@ pub struct LimitsRecord {
     pub startup_timeout_ms: Option<u64>,
     /// Time for every later answer; `None`: no limit.
     pub move_timeout_ms: Option<u64>,
-    /// The bot's address-space limit in MiB; `None`: no limit.
+    /// The bot's memory limit in MiB; `None`: no limit. In the sandbox it counts the
+    /// resident memory of all the bot's processes together; without it, it is each
+    /// process's address space.
     pub memory_limit_mb: Option<u64>,
+    /// The most processes and threads the bot may have at once (sandbox only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub process_limit: Option<u32>,
+    /// The size of the bot's writable scratch area in MiB (sandbox only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scratch_mb: Option<u64>,
+    /// The isolation the bot ran under: `full` or `none`.
+    #[serde(default = "sandbox_none")]
+    pub sandbox: String,
+}
+
+fn sandbox_none() -> String {
+    "none".to_string()
 }
 
 /// How long things took.
@@ -74,8 +118,9 @@ pub struct LimitsRecord {
 pub struct Timings {
     /// Wall time of the whole match, start of the process to its end, in ms.
     pub wall_ms: u64,
-    /// CPU time (user + system) the bot used, with its waited-for children, in ms, when
-    /// the operating system reports it.
+    /// CPU time (user + system) of all the bot's processes together, in ms, when it
+    /// can be measured (in the sandbox: every process the bot made; without it: the
+    /// bot process and its waited-for children).
     pub bot_cpu_ms: Option<u64>,
     /// The slowest answer, in microseconds.
     pub max_answer_us: u64,
@@ -92,6 +137,10 @@ pub struct TraceStep {
     /// Time from sending the sense message (first step: from the process start) to the
     /// answer line, in microseconds.
     pub answer_us: u64,
+    /// CPU time all the bot's processes used from sending the sense message to the
+    /// answer, in microseconds, when it can be measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_us: Option<u64>,
 }
 
 /// Everything about one match: enough to show it, score it, and re-run it exactly.
