@@ -86,7 +86,7 @@ pub struct LimitHit {
 }
 
 /// The limits a match was played under.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct LimitsRecord {
     /// The shared step budget.
     pub max_steps: u32,
