@@ -3,6 +3,10 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // Inside the sandbox, before anything else: set up the jail and exec the bot.
+    if let Some(code) = mazearena::cli::sandbox_exec_if_asked() {
+        return code;
+    }
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()

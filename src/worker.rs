@@ -41,6 +41,8 @@ pub struct WorkerConfig {
     pub lease: Duration,
     /// Limits for every match.
     pub limits: Limits,
+    /// How every bot is isolated.
+    pub sandbox: runner::Sandbox,
     /// Only claim this tournament's matches.
     pub only_tournament: Option<i64>,
     /// Stop when the queue is empty instead of waiting for more.
@@ -173,7 +175,14 @@ impl Worker {
         let lease_ms = self.config.lease.as_millis() as i64;
         let mut renew = tokio::time::interval(self.config.lease / 3);
         renew.tick().await; // the first tick is immediate
-        let game = runner::run_match(&bot, &maze, job.seed as u64, self.config.limits, |_| {});
+        let game = runner::run_match(
+            &bot,
+            &maze,
+            job.seed as u64,
+            self.config.limits,
+            &self.config.sandbox,
+            |_| {},
+        );
         tokio::pin!(game);
         loop {
             tokio::select! {

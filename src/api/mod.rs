@@ -51,6 +51,8 @@ pub struct Settings {
     pub data_dir: PathBuf,
     /// The most matches that may wait in the queue; beyond it, 429.
     pub max_queue: i64,
+    /// The isolation of bots (`full` or `none`), shown by `/healthz`.
+    pub sandbox_level: &'static str,
 }
 
 /// What every handler gets: cheap to clone.

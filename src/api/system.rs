@@ -27,6 +27,9 @@ pub struct Health {
     pub status: &'static str,
     /// Matches waiting to be played.
     pub queued: i64,
+    /// How bots are isolated: `full` (the sandbox) or `none` (started with
+    /// `--sandbox none`: only for bots the operator trusts).
+    pub sandbox: &'static str,
 }
 
 /// Liveness and database check.
@@ -38,6 +41,7 @@ async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>>
     Ok(axum::Json(Health {
         status: "ok",
         queued,
+        sandbox: state.settings.sandbox_level,
     }))
 }
 

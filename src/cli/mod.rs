@@ -4,6 +4,7 @@
 mod maze;
 mod report;
 mod run;
+mod sandbox;
 mod serve;
 mod tournament;
 
@@ -35,6 +36,19 @@ pub enum Command {
     Serve(serve::ServeArgs),
     /// Run a tournament locally (no server): every bot on every maze, into the database.
     Tournament(tournament::TournamentArgs),
+    /// Show each isolation mechanism of the sandbox and whether it works here.
+    Doctor(sandbox::DoctorArgs),
+}
+
+/// The jail step inside the sandbox, when this process was started as
+/// `mazearena sandbox-exec ...` (never returns then, unless it failed: see
+/// [`sandbox::sandbox_exec`]); `None` for every other command line.
+pub fn sandbox_exec_if_asked() -> Option<std::process::ExitCode> {
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    (args
+        .get(1)
+        .is_some_and(|a| a == crate::runner::sandbox::JAIL_SUBCOMMAND))
+    .then(|| sandbox::sandbox_exec(&args[2..]))
 }
 
 /// Parses the command line and runs it.
@@ -48,6 +62,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Maze(cmd) => maze::run(cmd),
         Command::Serve(args) => serve::run(args),
         Command::Tournament(args) => tournament::run(args),
+        Command::Doctor(args) => sandbox::doctor(args),
     }
 }
 

@@ -37,9 +37,18 @@ pub struct RunArgs {
     /// No time limits at all (to debug a bot step by step).
     #[arg(long)]
     no_timeout: bool,
-    /// The bot's address-space limit in MiB (0: no limit).
+    /// The bot's memory limit in MiB (0: no limit): resident memory of all its processes
+    /// together in the sandbox; without it, twice this as each process's address space.
     #[arg(long, default_value_t = runner::DEFAULT_MEMORY_LIMIT_MB)]
     memory_limit_mb: u64,
+    /// The most processes and threads the bot may have at once (sandbox only).
+    #[arg(long, default_value_t = runner::DEFAULT_PROCESS_LIMIT)]
+    process_limit: u32,
+    /// The size of the bot's writable scratch area (working directory and /tmp), in MiB.
+    #[arg(long, default_value_t = runner::DEFAULT_SCRATCH_MB)]
+    scratch_mb: u64,
+    #[command(flatten)]
+    sandbox: super::sandbox::SandboxArgs,
     /// Write the full match record with its per-step trace (JSON) to this file.
     #[arg(long)]
     replay: Option<PathBuf>,
@@ -65,8 +74,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         startup_timeout: (!args.no_timeout).then(|| Duration::from_millis(args.startup_timeout_ms)),
         move_timeout: (!args.no_timeout).then(|| Duration::from_millis(args.move_timeout_ms)),
         memory_limit_mb: (args.memory_limit_mb > 0).then_some(args.memory_limit_mb),
+        process_limit: Some(args.process_limit.max(1)),
+        scratch_mb: args.scratch_mb.max(1),
         ..Limits::default()
     };
+    let sandbox = args.sandbox.open(&[])?;
     let bot = BotSpec {
         command: args.bot.clone(),
         dir,
@@ -84,11 +96,18 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         );
         println!("Starting run 0.");
     }
-    let record = runtime.block_on(runner::run_match(&bot, &maze, args.seed, limits, |step| {
-        if !json {
-            print_step(step);
-        }
-    }));
+    let record = runtime.block_on(runner::run_match(
+        &bot,
+        &maze,
+        args.seed,
+        limits,
+        &sandbox,
+        |step| {
+            if !json {
+                print_step(step);
+            }
+        },
+    ));
     if let Some(path) = &args.replay {
         let text = serde_json::to_string(&record).context("cannot encode the match record")?;
         std::fs::write(path, text)

@@ -63,6 +63,8 @@ pub struct ServeArgs {
     /// stopped and re-queued, in seconds.
     #[arg(long, env = "MAZEARENA_SHUTDOWN_GRACE_SECS", default_value_t = 10)]
     shutdown_grace_secs: u64,
+    #[command(flatten)]
+    sandbox: super::sandbox::SandboxArgs,
 }
 
 /// Runs the server until SIGINT or SIGTERM.
@@ -85,6 +87,15 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .data_dir
         .canonicalize()
         .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
+    let mut hide = vec![data_dir.clone()];
+    if let Some(file) = args.database.strip_prefix("sqlite://") {
+        let file = file.split('?').next().unwrap_or(file);
+        hide.push(std::path::absolute(file).unwrap_or_else(|_| file.into()));
+    }
+    let sandbox = args
+        .sandbox
+        .open(&hide)
+        .context("refusing to serve without the sandbox")?;
     let storage = Storage::open(&args.database)
         .await
         .with_context(|| format!("cannot open the database {}", args.database))?;
@@ -121,6 +132,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             admin_token_hash: auth::hash_token(&admin_token),
             data_dir,
             max_queue: args.max_queue,
+            sandbox_level: sandbox.level(),
         }),
         metrics: metrics.clone(),
         wake: wake.clone(),
@@ -130,7 +142,10 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .await
         .with_context(|| format!("cannot listen on {}", args.bind))?;
     let addr = listener.local_addr()?;
-    println!("mazearena listening on http://{addr} ({jobs} match workers)");
+    println!(
+        "mazearena listening on http://{addr} ({jobs} match workers, sandbox {})",
+        state.settings.sandbox_level
+    );
     use std::io::Write;
     let _ = std::io::stdout().flush();
 
@@ -143,6 +158,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             jobs,
             lease: Duration::from_secs(args.lease_secs.max(1)),
             limits: Limits::default(),
+            sandbox,
             only_tournament: None,
             exit_when_idle: false,
         },

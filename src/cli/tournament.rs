@@ -18,7 +18,7 @@ use crate::api::auth;
 use crate::engine::mazefile::numeric;
 use crate::engine::solver;
 use crate::manifest::{self, BotManifest};
-use crate::runner::Limits;
+use crate::runner::{self, Limits};
 use crate::storage::Storage;
 use crate::storage::bots::NewVersion;
 use crate::storage::leaderboard::Scope;
@@ -59,6 +59,8 @@ pub struct TournamentArgs {
     /// score, the score the bot's manifest says its author claimed), then the standings.
     #[arg(long)]
     markdown: bool,
+    #[command(flatten)]
+    sandbox: super::sandbox::SandboxArgs,
 }
 
 /// Runs `mazearena tournament`.
@@ -83,15 +85,20 @@ pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
         );
     }
     let maze_files = maze_files(&args.mazes)?;
+    let sandbox = args.sandbox.open(&[])?;
+    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
     let mut built = std::collections::BTreeSet::new();
     for b in &bots {
         // Bots of one folder often share one build command: run it once.
-        if built.insert((b.dir.clone(), b.build.clone())) {
-            build(b)?;
+        let Some(cmd) = &b.build else { continue };
+        if built.insert((b.dir.clone(), cmd.clone())) {
+            eprintln!("building {} ({cmd})", b.name);
+            runtime
+                .block_on(runner::build::build(cmd, &b.dir, &sandbox))
+                .with_context(|| format!("{}: the build failed", b.name))?;
         }
     }
-    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
-    runtime.block_on(play(args, bots, maze_files))
+    runtime.block_on(play(args, bots, sandbox, maze_files))
 }
 
 fn maze_files(paths: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
@@ -114,30 +121,10 @@ fn maze_files(paths: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Runs a bot's build command in its folder, if it has one.
-fn build(bot: &BotManifest) -> anyhow::Result<()> {
-    let Some(cmd) = &bot.build else { return Ok(()) };
-    let words = shlex::split(cmd)
-        .filter(|w| !w.is_empty())
-        .with_context(|| format!("{}: the build command {cmd:?} cannot be split", bot.name))?;
-    eprintln!("building {} ({cmd})", bot.name);
-    let status = std::process::Command::new(&words[0])
-        .args(&words[1..])
-        .current_dir(&bot.dir)
-        .stdout(std::process::Stdio::null())
-        .status()
-        .with_context(|| format!("{}: cannot run the build command {cmd:?}", bot.name))?;
-    anyhow::ensure!(
-        status.success(),
-        "{}: the build command {cmd:?} failed ({status})",
-        bot.name
-    );
-    Ok(())
-}
-
 async fn play(
     args: TournamentArgs,
     bots: Vec<BotManifest>,
+    sandbox: runner::Sandbox,
     maze_files: Vec<PathBuf>,
 ) -> anyhow::Result<()> {
     let storage = Storage::open(&args.database)
@@ -217,6 +204,7 @@ async fn play(
             jobs,
             lease: worker::DEFAULT_LEASE,
             limits: Limits::default(),
+            sandbox,
             only_tournament: Some(t.tournament_id),
             exit_when_idle: true,
         },

@@ -1,27 +1,27 @@
 //! The bot runner: plays one match between one bot process and one maze.
 //!
-//! [`run_match`] starts the bot (see [`process`]), speaks protocol v1 with it under the
-//! time limits, drives the pure [`Game`], and always returns a
-//! [`MatchRecord`]: a misbehaving bot is an outcome recorded with its reason, never an
-//! error or a panic. Matches are plain futures, so many can run at once in one process.
+//! [`run_match`] starts the bot (see [`process`], in the [`sandbox`] unless told
+//! otherwise), speaks protocol v1 with it one step at a time ([`session`]), drives the
+//! pure [`Game`], and always returns a [`MatchRecord`]: a misbehaving bot is an outcome
+//! recorded with its reason, never an error or a panic. Matches are plain futures, so
+//! many can run at once in one process. This module is the only code that starts
+//! processes.
 
+pub mod build;
 pub mod framing;
 pub mod outcome;
 pub mod process;
+pub mod sandbox;
+pub mod session;
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use futures_util::StreamExt;
-use tokio::io::AsyncWriteExt;
-use tokio::process::{Child, ChildStdin};
-use tokio::time::timeout_at;
-use tokio_util::codec::AnyDelimiterCodecError;
-
-use crate::engine::game::StepReport;
 use crate::engine::{Game, GameConfig, GameEnd, Maze};
-use crate::protocol::{EXCERPT_BYTES, PROTOCOL_VERSION, ProtocolError, ServerMessage, excerpt};
-pub use outcome::{Failure, LimitsRecord, MatchRecord, MatchStatus, Timings, TraceStep};
+use crate::protocol::{PROTOCOL_VERSION, ServerMessage};
+pub use outcome::{Failure, LimitHit, LimitsRecord, MatchRecord, MatchStatus, Timings, TraceStep};
+pub use sandbox::Sandbox;
+use session::{Session, Verdict};
 
 /// The version of the referee, recorded with every match.
 pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -32,11 +32,18 @@ pub const DEFAULT_STARTUP_TIMEOUT: Duration = Duration::from_secs(10);
 /// Default time for every later answer.
 pub const DEFAULT_MOVE_TIMEOUT: Duration = Duration::from_millis(1000);
 
-/// Default address-space limit for a bot: 2 GiB (JavaScript runtimes reserve a lot of
-/// virtual memory up front; less than this stops Node from starting).
-pub const DEFAULT_MEMORY_LIMIT_MB: u64 = 2048;
+/// Default memory limit: 1 GiB of resident memory for all the bot's processes together
+/// (in the sandbox). Without the sandbox each process gets twice this as address space
+/// (JavaScript runtimes reserve a lot of virtual memory up front).
+pub const DEFAULT_MEMORY_LIMIT_MB: u64 = 1024;
 
-/// How long a bot may live after the end message before its process group is killed.
+/// Default limit on the bot's processes and threads at once (in the sandbox).
+pub const DEFAULT_PROCESS_LIMIT: u32 = 64;
+
+/// Default size of the bot's writable scratch area (working directory and `/tmp`).
+pub const DEFAULT_SCRATCH_MB: u64 = 64;
+
+/// How long a bot may live after the end message before all its processes are killed.
 pub const EXIT_GRACE: Duration = Duration::from_secs(1);
 
 /// A bot to run: a command and the directory it runs in.
@@ -44,7 +51,7 @@ pub const EXIT_GRACE: Duration = Duration::from_secs(1);
 pub struct BotSpec {
     /// The command line, split like a shell (no shell is run), e.g. `python3 bot.py`.
     pub command: String,
-    /// The working directory of the bot.
+    /// The bot's folder.
     pub dir: PathBuf,
 }
 
@@ -57,8 +64,12 @@ pub struct Limits {
     pub startup_timeout: Option<Duration>,
     /// Time for every later answer; `None`: no limit.
     pub move_timeout: Option<Duration>,
-    /// Address-space limit in MiB; `None`: no limit.
+    /// Memory limit in MiB (see [`DEFAULT_MEMORY_LIMIT_MB`]); `None`: no limit.
     pub memory_limit_mb: Option<u64>,
+    /// Processes and threads at once (sandbox only); `None`: no limit.
+    pub process_limit: Option<u32>,
+    /// Scratch area size in MiB (sandbox only).
+    pub scratch_mb: u64,
 }
 
 impl Default for Limits {
@@ -68,25 +79,29 @@ impl Default for Limits {
             startup_timeout: Some(DEFAULT_STARTUP_TIMEOUT),
             move_timeout: Some(DEFAULT_MOVE_TIMEOUT),
             memory_limit_mb: Some(DEFAULT_MEMORY_LIMIT_MB),
+            process_limit: Some(DEFAULT_PROCESS_LIMIT),
+            scratch_mb: DEFAULT_SCRATCH_MB,
         }
     }
 }
 
 impl Limits {
-    fn record(&self) -> LimitsRecord {
+    fn record(&self, sandbox: &Sandbox) -> LimitsRecord {
+        let sandboxed = matches!(sandbox, Sandbox::Full(_));
         LimitsRecord {
             max_steps: self.max_steps,
             startup_timeout_ms: self.startup_timeout.map(|d| d.as_millis() as u64),
             move_timeout_ms: self.move_timeout.map(|d| d.as_millis() as u64),
             memory_limit_mb: self.memory_limit_mb,
-            process_limit: None,
-            scratch_mb: None,
-            sandbox: "none".to_string(),
+            process_limit: self.process_limit.filter(|_| sandboxed),
+            scratch_mb: sandboxed.then_some(self.scratch_mb),
+            sandbox: sandbox.level().to_string(),
         }
     }
 }
 
-/// Plays one match of `bot` on `maze` and returns its record.
+/// Plays one match of `bot` on `maze` under `limits`, isolated by `sandbox`, and returns
+/// its record.
 ///
 /// `observe` is called after every step (for live progress output); pass `|_| {}` when
 /// not needed.
@@ -95,6 +110,7 @@ pub async fn run_match(
     maze: &Maze,
     seed: u64,
     limits: Limits,
+    sandbox: &Sandbox,
     mut observe: impl FnMut(&TraceStep) + Send,
 ) -> MatchRecord {
     let started = Instant::now();
@@ -104,60 +120,24 @@ pub async fn run_match(
             max_steps: limits.max_steps,
         },
     );
-    let mut record = MatchRecord {
-        engine_version: ENGINE_VERSION.to_string(),
-        protocol: PROTOCOL_VERSION,
-        maze_hash: maze.hash(),
-        maze_dim: maze.dim(),
-        seed,
-        limits: limits.record(),
-        status: MatchStatus::Crashed,
-        score: None,
-        run0_steps: None,
-        run1_steps: None,
-        total_steps: 0,
-        warnings: Vec::new(),
-        error: None,
-        stderr_tail: String::new(),
-        timings: Timings::default(),
-        bot_pid: None,
-        trace: Vec::new(),
-    };
-
+    let mut record = new_record(maze, seed, &limits, sandbox);
     let launch = process::Launch {
         command: &bot.command,
         dir: &bot.dir,
-        memory_limit_bytes: limits.memory_limit_mb.map(|mb| mb * 1024 * 1024),
+        memory_limit_bytes: limits.memory_limit_mb.map(|mb| mb << 20),
+        process_limit: limits.process_limit.map(u64::from),
+        scratch_bytes: limits.scratch_mb << 20,
+        sandbox,
     };
-    let mut child = match process::spawn(&launch) {
-        Ok(child) => child,
-        Err(e) => {
-            record.error = Some(Failure {
-                reason: e.to_string(),
-                ..Failure::default()
-            });
+    let mut session = match Session::start(&launch, limits) {
+        Ok(s) => s,
+        Err(failure) => {
+            record.error = Some(failure);
             record.timings.wall_ms = started.elapsed().as_millis() as u64;
             return record;
         }
     };
-    let pid = child.id();
-    record.bot_pid = pid;
-    let _guard = process::GroupGuard { pgid: pid };
-    // The pipes were requested in `spawn`; their absence would be a bug there.
-    let mut stdin = child
-        .stdin
-        .take()
-        .expect("stdin is piped by process::spawn");
-    let stdout = child
-        .stdout
-        .take()
-        .expect("stdout is piped by process::spawn");
-    let stderr = child
-        .stderr
-        .take()
-        .expect("stderr is piped by process::spawn");
-    let stderr_task = tokio::spawn(framing::read_tail(stderr, framing::STDERR_TAIL_BYTES));
-    let mut replies = framing::reply_reader(stdout);
+    record.bot_pid = session.pid();
 
     let start = ServerMessage::Start {
         protocol: PROTOCOL_VERSION,
@@ -166,101 +146,33 @@ pub async fn run_match(
         seed,
         move_timeout_ms: limits.move_timeout.map_or(0, |d| d.as_millis() as u64),
     };
-    let mut failure: Option<(MatchStatus, Failure)> = None;
-    if let Err(e) = send(&mut stdin, &start, None).await {
-        failure = Some(write_failure(e));
-    }
-
-    let mut answer_total_us: u64 = 0;
+    let mut failure = session.greet(&start).await.err();
     while failure.is_none() {
         let Some(sense) = game.begin_step() else {
             break;
         };
-        let sent_at = Instant::now();
-        let (since, limit) = if sense.step == 1 {
-            (started, limits.startup_timeout)
-        } else {
-            (sent_at, limits.move_timeout)
-        };
-        let deadline = limit.map(|l| tokio::time::Instant::from_std(since + l));
-        if let Err(e) = send(&mut stdin, &ServerMessage::sense(&sense), deadline).await {
-            failure = Some(write_failure(e));
-            break;
+        match session.exchange(&sense).await {
+            Verdict::Answer {
+                action,
+                answer_us,
+                cpu_us,
+            } => {
+                let step = TraceStep {
+                    report: game.apply(action),
+                    answer_us,
+                    cpu_us,
+                };
+                observe(&step);
+                record.trace.push(step);
+            }
+            Verdict::Fault(status, f) => failure = Some((status, f)),
         }
-        let next = match deadline {
-            Some(d) => timeout_at(d, replies.next()).await,
-            None => Ok(replies.next().await),
-        };
-        let line = match next {
-            Err(_) => {
-                let what = if sense.step == 1 { "startup" } else { "move" };
-                let ms = limit.map_or(0, |l| l.as_millis());
-                failure = Some((
-                    MatchStatus::Timeout,
-                    Failure {
-                        reason: format!(
-                            "no answer to step {} within the {what} limit of {ms} ms",
-                            sense.step
-                        ),
-                        ..Failure::default()
-                    },
-                ));
-                break;
-            }
-            Ok(None) => {
-                failure = Some((
-                    MatchStatus::Crashed,
-                    Failure {
-                        reason: format!(
-                            "the bot closed its stdout (or exited) before answering step {}",
-                            sense.step
-                        ),
-                        ..Failure::default()
-                    },
-                ));
-                break;
-            }
-            Ok(Some(Err(AnyDelimiterCodecError::MaxChunkLengthExceeded))) => {
-                failure = Some(protocol_failure(
-                    ProtocolError::LineTooLong,
-                    replies.read_buffer(),
-                ));
-                break;
-            }
-            Ok(Some(Err(AnyDelimiterCodecError::Io(e)))) => {
-                failure = Some((
-                    MatchStatus::Crashed,
-                    Failure {
-                        reason: format!("reading the bot's stdout failed: {e}"),
-                        ..Failure::default()
-                    },
-                ));
-                break;
-            }
-            Ok(Some(Ok(line))) => line,
-        };
-        // PROTOCOL-v1: the first answer is timed from the process start.
-        let answer_us = since.elapsed().as_micros() as u64;
-        let action = match crate::protocol::decode_reply(&line) {
-            Ok(action) => action,
-            Err(e) => {
-                failure = Some(protocol_failure(e, &line));
-                break;
-            }
-        };
-        answer_total_us += answer_us;
-        let report: StepReport = game.apply(action);
-        let step = TraceStep {
-            report,
-            answer_us,
-            cpu_us: None,
-        };
-        observe(&step);
-        record.timings.max_answer_us = record.timings.max_answer_us.max(answer_us);
-        record.trace.push(step);
+    }
+    // A limit hit at any time ends the match with its status, even if the bot went on.
+    if let Some(kind) = session.limit_hit() {
+        failure = Some(session::limit_failure(kind, &limits, game.t()));
     }
 
-    record.timings.bot_cpu_ms = pid.and_then(process::cpu_time_ms);
     record.total_steps = game.t();
     record.run0_steps = game.run0_steps();
     record.warnings = game.warnings().to_vec();
@@ -273,102 +185,58 @@ pub async fn run_match(
         record.run1_steps = game.run1_steps();
         record.score = game.score().map(|s| s.value());
     }
-    if !record.trace.is_empty() {
-        record.timings.mean_answer_us = answer_total_us / record.trace.len() as u64;
-    }
-
     let end = ServerMessage::End {
         status: record.status.to_string(),
         score: record.score,
         run0_steps: record.run0_steps,
         run1_steps: record.run1_steps,
     };
-    let exit = finish_process(&mut child, stdin, &end, pid).await;
+    let ended = session.finish(&end).await;
     if let Some((_, mut f)) = failure {
-        if let Some(status) = exit {
+        if let Some(status) = ended.exit {
             use std::os::unix::process::ExitStatusExt;
             f.exit_code = status.code();
             f.signal = status.signal();
         }
         record.error = Some(f);
     }
-    record.stderr_tail = match tokio::time::timeout(EXIT_GRACE, stderr_task).await {
-        Ok(Ok(tail)) => tail,
-        _ => String::from("[stderr could not be read to its end]"),
-    };
-    record.timings.wall_ms = started.elapsed().as_millis() as u64;
+    record.stderr_tail = ended.stderr_tail;
+    record.timings = timings(&record.trace, ended.cpu_ms, started);
     record
 }
 
-/// Sends the end message, closes stdin, gives the bot [`EXIT_GRACE`] to exit, then kills
-/// its whole process group and reaps it. Returns how the bot process ended, if known.
-async fn finish_process(
-    child: &mut Child,
-    mut stdin: ChildStdin,
-    end: &ServerMessage,
-    pid: Option<u32>,
-) -> Option<std::process::ExitStatus> {
-    let grace = tokio::time::Instant::now() + EXIT_GRACE;
-    let _ = send(&mut stdin, end, Some(grace)).await;
-    drop(stdin);
-    let status = timeout_at(grace, child.wait())
-        .await
-        .ok()
-        .and_then(Result::ok);
-    // Kill the whole group even when the leader exited: its children may linger.
-    if let Some(pgid) = pid {
-        process::kill_group(pgid);
-    }
-    match status {
-        Some(s) => Some(s),
-        None => child.wait().await.ok(),
+fn new_record(maze: &Maze, seed: u64, limits: &Limits, sandbox: &Sandbox) -> MatchRecord {
+    MatchRecord {
+        engine_version: ENGINE_VERSION.to_string(),
+        protocol: PROTOCOL_VERSION,
+        maze_hash: maze.hash(),
+        maze_dim: maze.dim(),
+        seed,
+        limits: limits.record(sandbox),
+        status: MatchStatus::Crashed,
+        score: None,
+        run0_steps: None,
+        run1_steps: None,
+        total_steps: 0,
+        warnings: Vec::new(),
+        error: None,
+        stderr_tail: String::new(),
+        timings: Timings::default(),
+        bot_pid: None,
+        trace: Vec::new(),
     }
 }
 
-/// Writes one message line to the bot, within `deadline` if given.
-async fn send(
-    stdin: &mut ChildStdin,
-    message: &ServerMessage,
-    deadline: Option<tokio::time::Instant>,
-) -> std::io::Result<()> {
-    let line = message.to_line();
-    let write = async {
-        stdin.write_all(line.as_bytes()).await?;
-        stdin.flush().await
-    };
-    match deadline {
-        Some(d) => timeout_at(d, write).await.unwrap_or_else(|_| {
-            Err(std::io::Error::new(
-                std::io::ErrorKind::TimedOut,
-                "the bot did not read its stdin in time",
-            ))
-        }),
-        None => write.await,
-    }
-}
-
-fn write_failure(e: std::io::Error) -> (MatchStatus, Failure) {
-    let status = if e.kind() == std::io::ErrorKind::TimedOut {
-        MatchStatus::Timeout
-    } else {
-        MatchStatus::Crashed
-    };
-    (
-        status,
-        Failure {
-            reason: format!("could not write to the bot's stdin: {e}"),
-            ..Failure::default()
+fn timings(trace: &[TraceStep], cpu_ms: Option<u64>, started: Instant) -> Timings {
+    let total: u64 = trace.iter().map(|s| s.answer_us).sum();
+    Timings {
+        wall_ms: started.elapsed().as_millis() as u64,
+        bot_cpu_ms: cpu_ms,
+        max_answer_us: trace.iter().map(|s| s.answer_us).max().unwrap_or(0),
+        mean_answer_us: if trace.is_empty() {
+            0
+        } else {
+            total / trace.len() as u64
         },
-    )
-}
-
-fn protocol_failure(e: ProtocolError, line: &[u8]) -> (MatchStatus, Failure) {
-    (
-        MatchStatus::ProtocolError,
-        Failure {
-            reason: e.to_string(),
-            line: Some(excerpt(line, EXCERPT_BYTES)),
-            ..Failure::default()
-        },
-    )
+    }
 }

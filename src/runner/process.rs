@@ -1,7 +1,10 @@
-//! Starting a bot process and ending it: its own process group, piped stdio, a small
-//! environment, resource limits, and a kill of the whole group when the match is over.
+//! Starting a bot process and ending it. With [`Sandbox::Full`] the process is
+//! bubblewrap, which builds the bot's world and runs it through the jail step; with
+//! [`Sandbox::None`] it is the bot itself. Either way it gets piped stdio, its own
+//! process group and a small environment, and every process it makes is killed when the
+//! match is over (by its cgroup, its PID namespace, and a kill of its tree and group).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Stdio;
 
 use nix::sys::resource::{Resource, setrlimit};
@@ -9,8 +12,11 @@ use nix::sys::signal::{Signal, killpg};
 use nix::unistd::Pid;
 use tokio::process::{Child, Command};
 
-/// Environment variables passed through to bots; everything else is cleared so a bot
-/// sees the same environment under the CLI and the server.
+use super::sandbox::cgroup::{self, CgroupHit, CgroupLimits, MatchCgroup};
+use super::sandbox::{JAIL_SUBCOMMAND, Sandbox, UidLease, jail, proctree};
+
+/// Environment variables passed through to bots run without the sandbox; everything
+/// else is cleared so a bot sees the same environment under the CLI and the server.
 const PASSED_ENV: &[&str] = &[
     "PATH",
     "HOME",
@@ -22,18 +28,31 @@ const PASSED_ENV: &[&str] = &[
     "PYENV_VERSION",
 ];
 
-/// The largest file a bot may write (RLIMIT_FSIZE), so a bot cannot fill the disk.
+/// The largest file a bot may write without the sandbox (RLIMIT_FSIZE), so a bot cannot
+/// fill the disk. In the sandbox its scratch size bounds it.
 pub const MAX_BOT_FILE_BYTES: u64 = 64 * 1024 * 1024;
+
+/// bubblewrap's own processes in the match (its monitor and the namespace's init),
+/// counted by the cgroup's process limit on top of the bot's.
+const BWRAP_PROCESSES: u64 = 2;
 
 /// How the bot process is started.
 #[derive(Debug, Clone)]
 pub struct Launch<'a> {
     /// The command line, split like a shell would (no shell is run).
     pub command: &'a str,
-    /// The bot's working directory.
+    /// The bot's folder: its working directory (in the sandbox: mounted read-only in a
+    /// writable scratch working directory).
     pub dir: &'a Path,
-    /// Address-space limit in bytes (RLIMIT_AS); `None`: no limit.
+    /// The memory limit in bytes: all processes' resident memory in the sandbox, each
+    /// process's address space (twice the value) without it.
     pub memory_limit_bytes: Option<u64>,
+    /// The most processes and threads at once (sandbox only).
+    pub process_limit: Option<u64>,
+    /// The size of the scratch area in bytes (sandbox only).
+    pub scratch_bytes: u64,
+    /// The isolation.
+    pub sandbox: &'a Sandbox,
 }
 
 /// Why a bot could not be started.
@@ -52,25 +71,129 @@ pub enum LaunchError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// The match's cgroup or sandbox could not be prepared (an operator problem).
+    #[error("could not prepare the sandbox: {0}")]
+    Sandbox(String),
 }
 
-/// Starts the bot in its own process group with piped stdin, stdout and stderr.
+/// Which whole-match limit a bot went over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LimitKind {
+    /// Resident memory of all its processes.
+    Memory,
+    /// Processes and threads at once.
+    Processes,
+    /// Its scratch area is full.
+    Scratch,
+}
+
+/// A running bot: the child process and everything that bounds and measures it.
+/// Dropping it kills every process of the bot.
+#[derive(Debug)]
+pub struct BotProcess {
+    /// The direct child (bubblewrap in the sandbox).
+    pub child: Child,
+    /// Its pid, also its process group id.
+    pub pid: Option<u32>,
+    cgroup: Option<MatchCgroup>,
+    _uid: Option<UidLease>,
+    sandboxed: bool,
+    memory_limit: Option<u64>,
+    process_limit: Option<u64>,
+}
+
+/// Starts the bot with piped stdin, stdout and stderr.
 ///
 /// # Errors
 /// [`LaunchError`] when the command is malformed or cannot be started.
-pub fn spawn(launch: &Launch<'_>) -> Result<Child, LaunchError> {
+pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
     let words = shlex::split(launch.command)
         .filter(|w| !w.is_empty())
         .ok_or_else(|| LaunchError::BadCommand(launch.command.to_string()))?;
-    let mut cmd = Command::new(&words[0]);
-    cmd.args(&words[1..])
-        .current_dir(launch.dir)
-        .env_clear()
-        .stdin(Stdio::piped())
+    let (mut cmd, cgroup, uid) = match launch.sandbox {
+        Sandbox::None => (direct(launch, &words), None, None),
+        Sandbox::Full(full) => {
+            let uid = full.as_root.then(UidLease::take);
+            let cgroup = match &full.cgroups {
+                Ok(root) => Some(
+                    root.create(CgroupLimits {
+                        memory_bytes: launch.memory_limit_bytes,
+                        pids: launch.process_limit.map(|n| n + BWRAP_PROCESSES),
+                    })
+                    .map_err(|e| LaunchError::Sandbox(e.to_string()))?,
+                ),
+                Err(_) => None,
+            };
+            let args =
+                super::sandbox::bwrap_args(full, Some(launch.dir), launch.scratch_bytes, false)
+                    .map_err(|e| LaunchError::Spawn {
+                        program: words[0].clone(),
+                        dir: launch.dir.display().to_string(),
+                        source: e,
+                    })?;
+            let jail = jail::JailArgs {
+                uid: uid.as_ref().map(UidLease::uid),
+                nproc: launch.process_limit,
+                fsize: Some(launch.scratch_bytes),
+                address_space: None,
+                command: words.iter().map(Into::into).collect(),
+            };
+            let mut cmd = Command::new(&full.bwrap);
+            cmd.args(args)
+                .arg(JAIL_SUBCOMMAND)
+                .args(jail.to_args())
+                .env_clear();
+            (cmd, cgroup, uid)
+        }
+    };
+    cmd.stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .process_group(0)
         .kill_on_drop(true);
+    let join = cgroup
+        .as_ref()
+        .map(MatchCgroup::join_fds)
+        .unwrap_or_default();
+    let per_process = match launch.sandbox {
+        Sandbox::None => Some((MAX_BOT_FILE_BYTES, launch.memory_limit_bytes.map(|b| b * 2))),
+        Sandbox::Full(_) => None,
+    };
+    // SAFETY: the closure runs in the child between fork and exec; it only calls
+    // write(2) on fds opened before the fork and setrlimit(2), both async-signal-safe,
+    // and allocates nothing.
+    unsafe {
+        cmd.pre_exec(move || {
+            cgroup::join_now(&join)?;
+            let _ = setrlimit(Resource::RLIMIT_CORE, 0, 0);
+            if let Some((fsize, address_space)) = per_process {
+                let _ = setrlimit(Resource::RLIMIT_FSIZE, fsize, fsize);
+                if let Some(bytes) = address_space {
+                    setrlimit(Resource::RLIMIT_AS, bytes, bytes).map_err(std::io::Error::from)?;
+                }
+            }
+            Ok(())
+        });
+    }
+    let child = cmd.spawn().map_err(|source| LaunchError::Spawn {
+        program: words[0].clone(),
+        dir: launch.dir.display().to_string(),
+        source,
+    })?;
+    Ok(BotProcess {
+        pid: child.id(),
+        child,
+        cgroup,
+        _uid: uid,
+        sandboxed: matches!(launch.sandbox, Sandbox::Full(_)),
+        memory_limit: launch.memory_limit_bytes,
+        process_limit: launch.process_limit,
+    })
+}
+
+fn direct(launch: &Launch<'_>, words: &[String]) -> Command {
+    let mut cmd = Command::new(&words[0]);
+    cmd.args(&words[1..]).current_dir(launch.dir).env_clear();
     for key in PASSED_ENV {
         if let Some(value) = std::env::var_os(key) {
             cmd.env(key, value);
@@ -78,28 +201,80 @@ pub fn spawn(launch: &Launch<'_>) -> Result<Child, LaunchError> {
     }
     cmd.env("PYTHONUNBUFFERED", "1");
     cmd.env("PYTHONDONTWRITEBYTECODE", "1");
-    let memory = launch.memory_limit_bytes;
-    // SAFETY: the closure runs in the child between fork and exec; it only calls
-    // setrlimit, which is async-signal-safe, and allocates nothing.
-    unsafe {
-        cmd.pre_exec(move || {
-            let _ = setrlimit(Resource::RLIMIT_CORE, 0, 0);
-            let _ = setrlimit(
-                Resource::RLIMIT_FSIZE,
-                MAX_BOT_FILE_BYTES,
-                MAX_BOT_FILE_BYTES,
-            );
-            if let Some(bytes) = memory {
-                setrlimit(Resource::RLIMIT_AS, bytes, bytes).map_err(std::io::Error::from)?;
-            }
-            Ok(())
-        });
+    cmd
+}
+
+impl BotProcess {
+    /// CPU time of all the bot's processes so far, in microseconds: the cgroup's
+    /// counter, else the sum over its live process tree (with waited-for children).
+    pub fn cpu_us(&self) -> Option<u64> {
+        match (&self.cgroup, self.pid) {
+            (Some(cg), _) => cg.cpu_us(),
+            (None, Some(pid)) => Some(proctree::usage(pid).cpu_us),
+            (None, None) => None,
+        }
     }
-    cmd.spawn().map_err(|source| LaunchError::Spawn {
-        program: words[0].clone(),
-        dir: launch.dir.display().to_string(),
-        source,
-    })
+
+    /// The whole-match limit the bot has gone over, if any. Without a cgroup, the
+    /// watchdog reads the process tree and kills it when it holds too much memory.
+    pub fn limit_hit(&self) -> Option<LimitKind> {
+        if !self.sandboxed {
+            return None;
+        }
+        if let Some(cg) = &self.cgroup {
+            return match cg.limit_hit() {
+                Some(CgroupHit::Memory) => Some(LimitKind::Memory),
+                Some(CgroupHit::Pids) => Some(LimitKind::Processes),
+                None => self.scratch_full().then_some(LimitKind::Scratch),
+            };
+        }
+        let pid = self.pid?;
+        let usage = proctree::usage(pid);
+        if self.memory_limit.is_some_and(|m| usage.rss_bytes > m) {
+            self.kill_all();
+            return Some(LimitKind::Memory);
+        }
+        // The tree holds bubblewrap's two processes and the bot's.
+        if self
+            .process_limit
+            .is_some_and(|n| usage.threads >= n + BWRAP_PROCESSES)
+        {
+            return Some(LimitKind::Processes);
+        }
+        self.scratch_full().then_some(LimitKind::Scratch)
+    }
+
+    /// Whether the bot's scratch tmpfs has no free block left, seen through the root of
+    /// a process inside the sandbox.
+    fn scratch_full(&self) -> bool {
+        let Some(pid) = self.pid else { return false };
+        let members = proctree::members(pid);
+        let Some(inner) = members.get(1) else {
+            return false;
+        };
+        let path = PathBuf::from(format!(
+            "/proc/{inner}/root{}",
+            super::sandbox::jail::SCRATCH
+        ));
+        nix::sys::statvfs::statvfs(&path).is_ok_and(|s| s.blocks_available() == 0)
+    }
+
+    /// Kills every process of the bot: its cgroup, its process tree and its group.
+    pub fn kill_all(&self) {
+        if let Some(cg) = &self.cgroup {
+            cg.kill_all();
+        }
+        if let Some(pid) = self.pid {
+            proctree::kill_tree(pid);
+            kill_group(pid);
+        }
+    }
+}
+
+impl Drop for BotProcess {
+    fn drop(&mut self) {
+        self.kill_all();
+    }
 }
 
 /// Kills every process of the bot's process group (the group id is the bot's pid).
@@ -108,69 +283,31 @@ pub fn kill_group(pgid: u32) {
     let _ = killpg(Pid::from_raw(pgid as i32), Signal::SIGKILL);
 }
 
-/// Kills the bot's process group when dropped, so a cancelled match leaves nothing behind.
-#[derive(Debug)]
-pub struct GroupGuard {
-    /// The process group id (the bot's pid).
-    pub pgid: Option<u32>,
-}
-
-impl Drop for GroupGuard {
-    fn drop(&mut self) {
-        if let Some(pgid) = self.pgid {
-            kill_group(pgid);
-        }
-    }
-}
-
-/// CPU time (user + system, including waited-for children) of a live or not yet reaped
-/// process, in milliseconds, read from `/proc/<pid>/stat` (Linux); `None` elsewhere.
-pub fn cpu_time_ms(pid: u32) -> Option<u64> {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // Fields after the command name, which is in parentheses and may hold spaces.
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let fields: Vec<&str> = rest.split_whitespace().collect();
-    // utime, stime, cutime, cstime are fields 14..=17 of stat(5); `rest` starts at 3.
-    let ticks: u64 = fields
-        .get(11..15)?
-        .iter()
-        .map(|f| f.parse::<u64>().unwrap_or(0))
-        .sum();
-    let hz = nix::unistd::sysconf(nix::unistd::SysconfVar::CLK_TCK)
-        .ok()
-        .flatten()
-        .filter(|&h| h > 0)? as u64;
-    Some(ticks * 1000 / hz)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn cpu_time_of_this_process_is_readable() {
-        assert!(cpu_time_ms(std::process::id()).is_some());
-    }
-
     #[tokio::test]
     async fn a_malformed_command_is_refused() {
         let dir = std::env::temp_dir();
+        let none = Sandbox::None;
+        let launch = |command| Launch {
+            command,
+            dir: &dir,
+            memory_limit_bytes: None,
+            process_limit: None,
+            scratch_bytes: 1 << 20,
+            sandbox: &none,
+        };
         for bad in ["", "   ", "python3 'unterminated"] {
-            let launch = Launch {
-                command: bad,
-                dir: &dir,
-                memory_limit_bytes: None,
-            };
             assert!(
-                matches!(spawn(&launch), Err(LaunchError::BadCommand(_))),
+                matches!(spawn(&launch(bad)), Err(LaunchError::BadCommand(_))),
                 "{bad:?}"
             );
         }
-        let launch = Launch {
-            command: "/nonexistent/bot",
-            dir: &dir,
-            memory_limit_bytes: None,
-        };
-        assert!(matches!(spawn(&launch), Err(LaunchError::Spawn { .. })));
+        assert!(matches!(
+            spawn(&launch("/nonexistent/bot")),
+            Err(LaunchError::Spawn { .. })
+        ));
     }
 }

@@ -1,0 +1,99 @@
+//! The `--sandbox` flag shared by `run`, `tournament` and `serve`, and `mazearena doctor`.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+
+use crate::runner::Sandbox;
+use crate::runner::sandbox::{Check, jail};
+
+/// How bots are isolated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SandboxChoice {
+    /// The full sandbox (namespaces, read-only view, seccomp, Landlock, whole-match
+    /// limits). Refuses to start when it cannot be had.
+    Full,
+    /// No isolation: bots run as your own user. Only for bots you trust.
+    None,
+}
+
+/// The `--sandbox` flag.
+#[derive(Debug, Clone, Args)]
+pub struct SandboxArgs {
+    /// Isolation of every bot: `full` (default) or `none` (only for bots you trust: a
+    /// bot then runs as your user and can read, write and signal what you can).
+    #[arg(long, env = "MAZEARENA_SANDBOX", value_enum, default_value = "full")]
+    pub sandbox: SandboxChoice,
+}
+
+impl SandboxArgs {
+    /// Sets up the chosen isolation; `hide` lists paths that must never be visible to
+    /// a bot (data dir, database).
+    ///
+    /// # Errors
+    /// `full` was asked and cannot be had here: the reason, and how to see more.
+    pub fn open(&self, hide: &[PathBuf]) -> anyhow::Result<Sandbox> {
+        match self.sandbox {
+            SandboxChoice::None => {
+                eprintln!(
+                    "warning: --sandbox none: bots run as your own user, unisolated (only for bots you trust)"
+                );
+                Ok(Sandbox::None)
+            }
+            SandboxChoice::Full => {
+                let exe = std::env::current_exe().context("cannot find the mazearena binary")?;
+                Sandbox::full(&exe, hide).map_err(|e| {
+                    anyhow::anyhow!(
+                        "{e}\n`mazearena doctor` shows what works here; `--sandbox none` runs bots unisolated (only for bots you trust)"
+                    )
+                })
+            }
+        }
+    }
+}
+
+/// Arguments of `mazearena doctor`.
+#[derive(Debug, Args)]
+pub struct DoctorArgs {
+    /// Print the checks as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Prints every isolation mechanism and whether it works here. Fails (exit status 1)
+/// when the full sandbox cannot run.
+///
+/// # Errors
+/// The full sandbox is not available.
+pub fn doctor(args: DoctorArgs) -> anyhow::Result<()> {
+    let exe = std::env::current_exe().context("cannot find the mazearena binary")?;
+    let (checks, result) = Sandbox::doctor(&exe);
+    if args.json {
+        let v = serde_json::json!({
+            "sandbox": result.as_ref().map_or("none", Sandbox::level),
+            "checks": checks,
+        });
+        println!("{v}");
+    } else {
+        for Check { name, ok, detail } in &checks {
+            println!("{:<13} {:<4} {detail}", name, if *ok { "ok" } else { "no" });
+        }
+        println!(
+            "sandbox level: {}",
+            result.as_ref().map_or("none", Sandbox::level)
+        );
+    }
+    result.map(|_| ()).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// `mazearena sandbox-exec ARGS`: the jail step inside the sandbox (not for people).
+/// Returns only on failure, with exit status [`jail::SETUP_FAILED`].
+pub fn sandbox_exec(args: &[std::ffi::OsString]) -> std::process::ExitCode {
+    let reason = match jail::JailArgs::parse(args) {
+        Ok(a) => jail::exec(&a),
+        Err(e) => e,
+    };
+    eprintln!("mazearena sandbox: {reason}");
+    std::process::ExitCode::from(jail::SETUP_FAILED as u8)
+}

@@ -1,0 +1,441 @@
+//! Whole-match limits with control groups (v1 or v2): one cgroup per match that holds
+//! every process of the bot, with a memory limit (resident, all processes together), a
+//! process/thread limit, a CPU quota of one core (so a bot's helpers cannot slow another
+//! match) and a CPU-time counter. The bot's outer process joins it before it `exec`s, so
+//! no process of the bot is ever outside it.
+//!
+//! Match cgroups are made under this server's own cgroup (read from `/proc/self/cgroup`),
+//! in a folder `mazearena`, so an operator's limits on the server also bound its bots.
+
+use std::fs::{File, OpenOptions};
+use std::os::fd::{AsRawFd, RawFd};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// The CPU quota period, in microseconds; the quota is one period (one core).
+const CPU_PERIOD_US: u64 = 100_000;
+
+/// Which cgroup version is in use, and where.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CgroupRoot {
+    /// Separate hierarchies per controller; each path is this server's `mazearena` folder.
+    V1 {
+        /// The memory controller's folder.
+        memory: PathBuf,
+        /// The pids controller's folder.
+        pids: PathBuf,
+        /// The cpuacct controller's folder (CPU time).
+        cpuacct: PathBuf,
+        /// The cpu controller's folder (the quota), when mounted.
+        cpu: Option<PathBuf>,
+    },
+    /// The unified hierarchy: one folder with memory, pids and cpu enabled below it.
+    V2 {
+        /// This server's `mazearena` folder.
+        base: PathBuf,
+    },
+}
+
+/// The limits one match cgroup enforces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CgroupLimits {
+    /// Resident memory of all processes together, in bytes.
+    pub memory_bytes: Option<u64>,
+    /// Processes and threads at once.
+    pub pids: Option<u64>,
+}
+
+/// A limit that a match cgroup saw being hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CgroupHit {
+    /// The kernel's OOM killer ended a process of the bot.
+    Memory,
+    /// A fork or thread creation was refused.
+    Pids,
+}
+
+static NEXT: AtomicU64 = AtomicU64::new(0);
+
+impl CgroupRoot {
+    /// Finds a cgroup hierarchy this process may make match cgroups in, and proves it by
+    /// making and removing one with limits. `Err` says why none can be used.
+    ///
+    /// # Errors
+    /// A message for `mazearena doctor`.
+    pub fn detect() -> Result<CgroupRoot, String> {
+        let own = std::fs::read_to_string("/proc/self/cgroup")
+            .map_err(|e| format!("/proc/self/cgroup: {e}"))?;
+        let mounts = std::fs::read_to_string("/proc/self/mountinfo")
+            .map_err(|e| format!("/proc/self/mountinfo: {e}"))?;
+        let v1 = detect_v1(&own, &mounts);
+        let root = match v1 {
+            Ok(root) => root,
+            Err(v1_err) => detect_v2(&own, &mounts)
+                .map_err(|v2_err| format!("cgroup v1: {v1_err}; cgroup v2: {v2_err}"))?,
+        };
+        let probe = root
+            .create(CgroupLimits {
+                memory_bytes: Some(64 << 20),
+                pids: Some(8),
+            })
+            .map_err(|e| format!("cannot make a match cgroup: {e}"))?;
+        drop(probe);
+        Ok(root)
+    }
+
+    /// The version, for reports: `v1` or `v2`.
+    pub fn version(&self) -> &'static str {
+        match self {
+            CgroupRoot::V1 { .. } => "v1",
+            CgroupRoot::V2 { .. } => "v2",
+        }
+    }
+
+    /// Makes the cgroup of one match with `limits`.
+    ///
+    /// # Errors
+    /// The file system errors of making or configuring it.
+    pub fn create(&self, limits: CgroupLimits) -> std::io::Result<MatchCgroup> {
+        let name = format!(
+            "m-{}-{}",
+            std::process::id(),
+            NEXT.fetch_add(1, Ordering::Relaxed)
+        );
+        let mut group = MatchCgroup {
+            dirs: Vec::new(),
+            procs: Vec::new(),
+            version: self.clone(),
+            memory: PathBuf::new(),
+            pids: PathBuf::new(),
+            cpu_usage: PathBuf::new(),
+        };
+        match self {
+            CgroupRoot::V1 {
+                memory,
+                pids,
+                cpuacct,
+                cpu,
+            } => {
+                group.memory = group.make(&memory.join(&name))?;
+                group.pids = group.make(&pids.join(&name))?;
+                let acct = group.make(&cpuacct.join(&name))?;
+                group.cpu_usage = acct.join("cpuacct.usage");
+                if let Some(mem) = limits.memory_bytes {
+                    write(&group.memory, "memory.limit_in_bytes", mem)?;
+                    // Swap would let a bot hold more than the limit; refuse it where the
+                    // kernel accounts swap.
+                    if group.memory.join("memory.memsw.limit_in_bytes").exists() {
+                        write(&group.memory, "memory.memsw.limit_in_bytes", mem)?;
+                    }
+                }
+                if let Some(n) = limits.pids {
+                    write(&group.pids, "pids.max", n)?;
+                }
+                if let Some(cpu) = cpu {
+                    if cpu != cpuacct {
+                        let dir = group.make(&cpu.join(&name))?;
+                        write(&dir, "cpu.cfs_period_us", CPU_PERIOD_US)?;
+                        write(&dir, "cpu.cfs_quota_us", CPU_PERIOD_US)?;
+                    } else {
+                        write(&acct, "cpu.cfs_period_us", CPU_PERIOD_US)?;
+                        write(&acct, "cpu.cfs_quota_us", CPU_PERIOD_US)?;
+                    }
+                }
+            }
+            CgroupRoot::V2 { base } => {
+                let dir = group.make(&base.join(&name))?;
+                if let Some(mem) = limits.memory_bytes {
+                    write(&dir, "memory.max", mem)?;
+                    let _ = std::fs::write(dir.join("memory.swap.max"), "0");
+                }
+                if let Some(n) = limits.pids {
+                    write(&dir, "pids.max", n)?;
+                }
+                let _ = std::fs::write(
+                    dir.join("cpu.max"),
+                    format!("{CPU_PERIOD_US} {CPU_PERIOD_US}"),
+                );
+                group.memory = dir.clone();
+                group.pids = dir.clone();
+                group.cpu_usage = dir.join("cpu.stat");
+            }
+        }
+        Ok(group)
+    }
+}
+
+fn write(dir: &Path, file: &str, value: u64) -> std::io::Result<()> {
+    std::fs::write(dir.join(file), value.to_string())
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.join(file).display())))
+}
+
+/// The cgroup of one running match. Dropping it kills every process left in it and
+/// removes it.
+#[derive(Debug)]
+pub struct MatchCgroup {
+    dirs: Vec<PathBuf>,
+    procs: Vec<File>,
+    version: CgroupRoot,
+    memory: PathBuf,
+    pids: PathBuf,
+    cpu_usage: PathBuf,
+}
+
+impl MatchCgroup {
+    fn make(&mut self, dir: &Path) -> std::io::Result<PathBuf> {
+        std::fs::create_dir(dir)
+            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.display())))?;
+        self.dirs.push(dir.to_path_buf());
+        self.procs.push(
+            OpenOptions::new()
+                .write(true)
+                .open(dir.join("cgroup.procs"))?,
+        );
+        Ok(dir.to_path_buf())
+    }
+
+    /// Open `cgroup.procs` files: writing `0` to each moves the writing process in.
+    /// Done by the bot's outer process between fork and exec (see `process::spawn`).
+    pub fn join_fds(&self) -> Vec<RawFd> {
+        self.procs.iter().map(AsRawFd::as_raw_fd).collect()
+    }
+
+    /// CPU time used by every process that ever ran in the cgroup, in microseconds.
+    pub fn cpu_us(&self) -> Option<u64> {
+        let text = std::fs::read_to_string(&self.cpu_usage).ok()?;
+        match self.version {
+            CgroupRoot::V1 { .. } => text.trim().parse::<u64>().ok().map(|ns| ns / 1000),
+            CgroupRoot::V2 { .. } => counter(&text, "usage_usec"),
+        }
+    }
+
+    /// The first limit found hit, if any: an OOM kill, or a refused fork.
+    pub fn limit_hit(&self) -> Option<CgroupHit> {
+        let oom = match self.version {
+            CgroupRoot::V1 { .. } => {
+                read_counter(&self.memory.join("memory.oom_control"), "oom_kill")
+            }
+            CgroupRoot::V2 { .. } => read_counter(&self.memory.join("memory.events"), "oom_kill"),
+        };
+        if oom.unwrap_or(0) > 0 {
+            return Some(CgroupHit::Memory);
+        }
+        if read_counter(&self.pids.join("pids.events"), "max").unwrap_or(0) > 0 {
+            return Some(CgroupHit::Pids);
+        }
+        None
+    }
+
+    /// Process ids still in the cgroup.
+    pub fn members(&self) -> Vec<i32> {
+        std::fs::read_to_string(self.pids.join("cgroup.procs"))
+            .unwrap_or_default()
+            .lines()
+            .filter_map(|l| l.trim().parse().ok())
+            .collect()
+    }
+
+    /// Kills every process in the cgroup and waits (up to 2 s) until it is empty.
+    pub fn kill_all(&self) {
+        if let CgroupRoot::V2 { .. } = self.version {
+            let _ = std::fs::write(self.pids.join("cgroup.kill"), "1");
+        }
+        let until = Instant::now() + Duration::from_secs(2);
+        loop {
+            let members = self.members();
+            if members.is_empty() || Instant::now() > until {
+                break;
+            }
+            for pid in members {
+                let _ = nix::sys::signal::kill(
+                    nix::unistd::Pid::from_raw(pid),
+                    nix::sys::signal::Signal::SIGKILL,
+                );
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}
+
+impl Drop for MatchCgroup {
+    fn drop(&mut self) {
+        self.kill_all();
+        self.procs.clear();
+        for dir in self.dirs.iter().rev() {
+            // A dying process may hold the cgroup for a moment.
+            for _ in 0..200 {
+                if std::fs::remove_dir(dir).is_ok() || !dir.exists() {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+    }
+}
+
+fn read_counter(path: &Path, key: &str) -> Option<u64> {
+    counter(&std::fs::read_to_string(path).ok()?, key)
+}
+
+/// The value of `key` in a `key value` per line file such as `memory.events`.
+fn counter(text: &str, key: &str) -> Option<u64> {
+    text.lines().find_map(|l| {
+        let mut words = l.split_whitespace();
+        (words.next() == Some(key))
+            .then(|| words.next()?.parse().ok())
+            .flatten()
+    })
+}
+
+/// Mount points of cgroup file systems from `/proc/self/mountinfo`: (mount point, fs
+/// type, super options).
+fn cgroup_mounts(mountinfo: &str) -> Vec<(PathBuf, String, String)> {
+    mountinfo
+        .lines()
+        .filter_map(|line| {
+            let (left, right) = line.split_once(" - ")?;
+            let mount_point = left.split(' ').nth(4)?;
+            let mut r = right.split(' ');
+            let fstype = r.next()?;
+            let _source = r.next()?;
+            let options = r.next().unwrap_or("");
+            (fstype == "cgroup" || fstype == "cgroup2").then(|| {
+                (
+                    PathBuf::from(mount_point),
+                    fstype.to_string(),
+                    options.to_string(),
+                )
+            })
+        })
+        .collect()
+}
+
+/// This process's path in the hierarchy whose controller list contains `controller`
+/// (v1), or in the unified one (`controller` empty).
+fn own_path(own: &str, controller: &str) -> Option<String> {
+    own.lines().find_map(|l| {
+        let mut parts = l.splitn(3, ':');
+        let _id = parts.next()?;
+        let controllers = parts.next()?;
+        let path = parts.next()?;
+        let hit = if controller.is_empty() {
+            controllers.is_empty()
+        } else {
+            controllers.split(',').any(|c| c == controller)
+        };
+        hit.then(|| path.to_string())
+    })
+}
+
+fn ensure_dir(dir: &Path) -> Result<(), String> {
+    match std::fs::create_dir(dir) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(format!("cannot create {}: {e}", dir.display())),
+    }
+}
+
+fn detect_v1(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
+    let mounts = cgroup_mounts(mountinfo);
+    let folder = |controller: &str| -> Result<PathBuf, String> {
+        let (mount, _, _) = mounts
+            .iter()
+            .find(|(_, t, o)| t == "cgroup" && o.split(',').any(|x| x == controller))
+            .ok_or_else(|| format!("no {controller} hierarchy mounted"))?;
+        let path = own_path(own, controller).unwrap_or_else(|| "/".into());
+        let dir = mount.join(path.trim_start_matches('/')).join("mazearena");
+        ensure_dir(&dir)?;
+        Ok(dir)
+    };
+    Ok(CgroupRoot::V1 {
+        memory: folder("memory")?,
+        pids: folder("pids")?,
+        cpuacct: folder("cpuacct")?,
+        cpu: folder("cpu").ok(),
+    })
+}
+
+fn detect_v2(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
+    let mounts = cgroup_mounts(mountinfo);
+    let (mount, _, _) = mounts
+        .iter()
+        .find(|(_, t, _)| t == "cgroup2")
+        .ok_or("no cgroup2 hierarchy mounted")?;
+    let path = own_path(own, "").ok_or("this process is in no cgroup2 group")?;
+    let here = mount.join(path.trim_start_matches('/'));
+    let controllers = std::fs::read_to_string(here.join("cgroup.controllers")).unwrap_or_default();
+    for needed in ["memory", "pids"] {
+        if !controllers.split_whitespace().any(|c| c == needed) {
+            return Err(format!(
+                "the {needed} controller is not available in {}",
+                here.display()
+            ));
+        }
+    }
+    let enable = |dir: &Path| {
+        std::fs::write(dir.join("cgroup.subtree_control"), "+memory +pids +cpu")
+            .or_else(|_| std::fs::write(dir.join("cgroup.subtree_control"), "+memory +pids"))
+    };
+    if enable(&here).is_err() {
+        // "No internal processes": move this server into a leaf of its own first.
+        let leaf = here.join("mazearena-server");
+        ensure_dir(&leaf)?;
+        std::fs::write(leaf.join("cgroup.procs"), std::process::id().to_string())
+            .map_err(|e| format!("cannot move the server into {}: {e}", leaf.display()))?;
+        enable(&here)
+            .map_err(|e| format!("cannot enable controllers in {}: {e}", here.display()))?;
+    }
+    let base = here.join("mazearena");
+    ensure_dir(&base)?;
+    enable(&base).map_err(|e| format!("cannot enable controllers in {}: {e}", base.display()))?;
+    Ok(CgroupRoot::V2 { base })
+}
+
+/// Writes `0` to each fd: moves the calling process into those cgroups. Only
+/// async-signal-safe calls, for use between fork and exec.
+pub fn join_now(fds: &[RawFd]) -> std::io::Result<()> {
+    for &fd in fds {
+        // SAFETY: `fd` is an open cgroup.procs file owned by the MatchCgroup, which
+        // outlives the spawn; write(2) is async-signal-safe.
+        let n = unsafe { libc::write(fd, b"0".as_ptr().cast(), 1) };
+        if n != 1 {
+            return Err(std::io::Error::last_os_error());
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counters_are_read_by_key() {
+        let events = "low 0\nhigh 0\nmax 3\noom 1\noom_kill 2\n";
+        assert_eq!(counter(events, "oom_kill"), Some(2));
+        assert_eq!(counter(events, "max"), Some(3));
+        assert_eq!(counter(events, "missing"), None);
+    }
+
+    #[test]
+    fn own_paths_are_found_per_controller() {
+        let own = "9:name=systemd:/\n4:memory:/a/b\n2:cpu,cpuacct:/c\n0::/unified\n";
+        assert_eq!(own_path(own, "memory").as_deref(), Some("/a/b"));
+        assert_eq!(own_path(own, "cpuacct").as_deref(), Some("/c"));
+        assert_eq!(own_path(own, "").as_deref(), Some("/unified"));
+        assert_eq!(own_path(own, "pids"), None);
+    }
+
+    #[test]
+    fn cgroup_mounts_are_parsed_from_mountinfo() {
+        let info = "30 25 0:26 / /sys/fs/cgroup/memory rw,relatime shared:9 - cgroup cgroup rw,memory\n\
+                    31 25 0:27 / /sys/fs/cgroup/unified rw - cgroup2 cgroup2 rw\n\
+                    32 25 0:28 / /proc rw - proc proc rw\n";
+        let mounts = cgroup_mounts(info);
+        assert_eq!(mounts.len(), 2);
+        assert_eq!(mounts[0].0, PathBuf::from("/sys/fs/cgroup/memory"));
+        assert_eq!(mounts[0].2, "rw,memory");
+        assert_eq!(mounts[1].1, "cgroup2");
+    }
+}

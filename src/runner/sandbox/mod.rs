@@ -1,0 +1,286 @@
+//! The isolated world a bot runs in, one per match.
+//!
+//! [`Sandbox::Full`] runs every bot through **bubblewrap** (the sandbox Flatpak uses):
+//! fresh mount, PID, network (a down loopback only), IPC and UTS namespaces, plus a user
+//! namespace when the server is not root; a filesystem view that holds only what a
+//! language runtime needs, read-only, the bot's own files read-only, and a size-limited
+//! tmpfs scratch area as its working directory and `/tmp`. Inside, `mazearena
+//! sandbox-exec` ([`jail`]) switches to the match's own unprivileged uid when the server
+//! is root, sets `no_new_privs`, Landlock and a seccomp filter, then `exec`s the bot.
+//! Limits hold for the whole match, every process together: a cgroup ([`cgroup`], v1 or
+//! v2) where one can be made, else a watchdog over the process tree ([`proctree`]).
+//!
+//! [`Sandbox::None`] runs the bot directly as the server's user: only for bots you trust.
+
+pub mod cgroup;
+pub mod jail;
+pub mod proctree;
+pub mod seccomp;
+mod uid;
+mod view;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+pub use uid::UidLease;
+
+/// Where the `mazearena` binary is mounted inside the sandbox.
+pub const HELPER_IN_SANDBOX: &str = "/run/mazearena/mazearena";
+
+/// The subcommand of the helper that runs [`jail::exec`].
+pub const JAIL_SUBCOMMAND: &str = "sandbox-exec";
+
+/// How bots are isolated.
+#[derive(Debug, Clone, Default)]
+pub enum Sandbox {
+    /// No isolation: the bot runs as the server's own user, in its own process group,
+    /// with per-process limits. Only for bots you trust.
+    #[default]
+    None,
+    /// The full sandbox.
+    Full(Arc<FullSandbox>),
+}
+
+/// What the full sandbox found on this machine.
+#[derive(Debug)]
+pub struct FullSandbox {
+    /// The bubblewrap program.
+    pub bwrap: PathBuf,
+    /// The `mazearena` binary, mounted inside for `sandbox-exec`.
+    pub helper: PathBuf,
+    /// True when the server runs as root: each match gets its own unprivileged uid.
+    pub as_root: bool,
+    /// The cgroup hierarchy for whole-match limits, or why there is none (then the
+    /// watchdog enforces them).
+    pub cgroups: Result<cgroup::CgroupRoot, String>,
+    /// Language runtimes' install roots outside `/usr`, mounted read-only.
+    pub runtime_roots: Vec<PathBuf>,
+    /// The environment every bot gets.
+    pub env: Vec<(String, String)>,
+}
+
+/// Why the full sandbox cannot run here.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("the sandbox is not available: {0}")]
+pub struct Unavailable(pub String);
+
+/// One line of `mazearena doctor`.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct Check {
+    /// The mechanism.
+    pub name: String,
+    /// Whether it works here.
+    pub ok: bool,
+    /// What was found.
+    pub detail: String,
+}
+
+impl Sandbox {
+    /// `full` or `none`, as recorded with every match and shown by `/healthz`.
+    pub fn level(&self) -> &'static str {
+        match self {
+            Sandbox::None => "none",
+            Sandbox::Full(_) => "full",
+        }
+    }
+
+    /// Sets up the full sandbox with `helper` as the `mazearena` binary (usually
+    /// `std::env::current_exe()`), and proves that it works by running a command in it.
+    /// `hide` lists paths (data dir, database) that must never be inside a mounted
+    /// runtime root.
+    ///
+    /// # Errors
+    /// [`Unavailable`] with the reason when bubblewrap is missing or cannot make the
+    /// namespaces, or the jail step fails.
+    pub fn full(helper: &Path, hide: &[PathBuf]) -> Result<Sandbox, Unavailable> {
+        let bwrap = find_program("bwrap").ok_or_else(|| {
+            Unavailable(
+                "bubblewrap (`bwrap`) is not installed (Debian: apt-get install bubblewrap)".into(),
+            )
+        })?;
+        let helper = helper
+            .canonicalize()
+            .map_err(|e| Unavailable(format!("the mazearena binary {}: {e}", helper.display())))?;
+        let full = FullSandbox {
+            bwrap,
+            helper,
+            as_root: nix::unistd::geteuid().is_root(),
+            cgroups: cgroup::CgroupRoot::detect(),
+            runtime_roots: view::runtime_roots(hide),
+            env: view::bot_env(),
+        };
+        let sandbox = Sandbox::Full(Arc::new(full));
+        let status = sandbox.self_test()?;
+        for (key, want) in [("NoNewPrivs", "1"), ("Seccomp", "2")] {
+            if status.get(key).map(String::as_str) != Some(want) {
+                return Err(Unavailable(format!(
+                    "a test command in the sandbox has {key} = {:?}, not {want}",
+                    status.get(key)
+                )));
+            }
+        }
+        Ok(sandbox)
+    }
+
+    /// Runs `cat /proc/self/status` in the sandbox and returns its fields.
+    fn self_test(&self) -> Result<std::collections::BTreeMap<String, String>, Unavailable> {
+        let Sandbox::Full(full) = self else {
+            return Err(Unavailable("no sandbox".into()));
+        };
+        let lease = full.as_root.then(UidLease::take);
+        let args =
+            view::bwrap_args(full, None, 1 << 20, false).map_err(|e| Unavailable(e.to_string()))?;
+        let jail = jail::JailArgs {
+            uid: lease.as_ref().map(UidLease::uid),
+            nproc: Some(16),
+            command: vec!["cat".into(), "/proc/self/status".into()],
+            ..jail::JailArgs::default()
+        };
+        let out = std::process::Command::new(&full.bwrap)
+            .args(args)
+            .arg(JAIL_SUBCOMMAND)
+            .args(jail.to_args())
+            .env_clear()
+            .stdin(std::process::Stdio::null())
+            .output()
+            .map_err(|e| Unavailable(format!("cannot run {}: {e}", full.bwrap.display())))?;
+        if !out.status.success() {
+            return Err(Unavailable(format!(
+                "a test command in the sandbox failed ({}): {}",
+                out.status,
+                String::from_utf8_lossy(&out.stderr).trim()
+            )));
+        }
+        Ok(String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter_map(|l| l.split_once(':'))
+            .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+            .collect())
+    }
+
+    /// Every mechanism and whether it works here, for `mazearena doctor`.
+    pub fn doctor(helper: &Path) -> (Vec<Check>, Result<Sandbox, Unavailable>) {
+        let check = |name: &str, ok: bool, detail: String| Check {
+            name: name.into(),
+            ok,
+            detail,
+        };
+        let mut checks = Vec::new();
+        let bwrap = find_program("bwrap");
+        checks.push(check(
+            "bubblewrap",
+            bwrap.is_some(),
+            bwrap.as_ref().map_or("not found on PATH".into(), |p| {
+                let v = std::process::Command::new(p).arg("--version").output();
+                format!(
+                    "{} ({})",
+                    p.display(),
+                    v.map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+                        .unwrap_or_default()
+                )
+            }),
+        ));
+        let root = nix::unistd::geteuid().is_root();
+        checks.push(check(
+            "identity",
+            true,
+            if root {
+                "running as root: each match runs as its own unprivileged uid".into()
+            } else {
+                "not root: each match gets a user namespace".into()
+            },
+        ));
+        let result = Sandbox::full(helper, &[]);
+        let status = result.as_ref().ok().map(|s| s.self_test());
+        let field = |k: &str| match &status {
+            Some(Ok(s)) => s.get(k).cloned().unwrap_or_default(),
+            _ => String::new(),
+        };
+        checks.push(check(
+            "namespaces",
+            result.is_ok(),
+            match &result {
+                Ok(_) => {
+                    "mount, pid, net, ipc, uts (and user when not root): a test command ran".into()
+                }
+                Err(e) => e.0.clone(),
+            },
+        ));
+        checks.push(check(
+            "no_new_privs",
+            field("NoNewPrivs") == "1",
+            format!("NoNewPrivs = {:?} in the sandbox", field("NoNewPrivs")),
+        ));
+        checks.push(check(
+            "seccomp",
+            field("Seccomp") == "2",
+            format!(
+                "Seccomp = {:?} (2: filtering), {} filters",
+                field("Seccomp"),
+                field("Seccomp_filters")
+            ),
+        ));
+        let abi = landlock_abi();
+        checks.push(check(
+            "landlock",
+            abi > 0,
+            if abi > 0 {
+                format!("ABI {abi} (second wall: filesystem writes, TCP, signals)")
+            } else {
+                "not available in this kernel (optional: the namespaces still hold)".into()
+            },
+        ));
+        let cg = cgroup::CgroupRoot::detect();
+        checks.push(check(
+            "cgroups",
+            cg.is_ok(),
+            match &cg {
+                Ok(r) => format!(
+                    "{}: memory, processes and a one-core CPU quota per match, CPU time of every process",
+                    r.version()
+                ),
+                Err(e) => format!("{e} (limits fall back to a watchdog over the process tree; no CPU quota)"),
+            },
+        ));
+        if let Ok(Sandbox::Full(f)) = &result {
+            checks.push(check(
+                "runtimes",
+                true,
+                format!(
+                    "mounted read-only besides /usr: {}",
+                    f.runtime_roots
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        (checks, result)
+    }
+}
+
+/// The highest Landlock ABI the kernel offers, 0 when none.
+pub fn landlock_abi() -> i64 {
+    // SAFETY: landlock_create_ruleset(NULL, 0, LANDLOCK_CREATE_RULESET_VERSION) only
+    // returns a number.
+    let v = unsafe {
+        libc::syscall(
+            libc::SYS_landlock_create_ruleset,
+            std::ptr::null::<u8>(),
+            0usize,
+            1u32,
+        )
+    };
+    v.max(0)
+}
+
+/// Finds `name` on PATH.
+pub fn find_program(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
+}
+
+pub(crate) use view::bwrap_args;

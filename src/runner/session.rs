@@ -1,0 +1,341 @@
+//! One bot's side of a match: start it, exchange one sense message for one answer at a
+//! time, end it. [`Session::exchange`] returns a [`Verdict`] per step, so the match loop
+//! in [`super::run_match`] stays a short loop over verdicts.
+
+use std::time::{Duration, Instant};
+
+use futures_util::StreamExt;
+use tokio::io::AsyncWriteExt;
+use tokio::process::ChildStdin;
+use tokio::time::timeout_at;
+use tokio_util::codec::AnyDelimiterCodecError;
+
+use super::framing;
+use super::outcome::{Failure, LimitHit, MatchStatus};
+use super::process::{self, BotProcess, LimitKind};
+use super::{EXIT_GRACE, Limits};
+use crate::engine::Action;
+use crate::engine::game::Sense;
+use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
+
+/// How often the whole-match limits are looked at while the bot thinks.
+const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
+
+/// What one step's exchange gave.
+#[derive(Debug)]
+pub enum Verdict {
+    /// A valid answer, with its wall time and the CPU time all the bot's processes used.
+    Answer {
+        /// The decoded answer.
+        action: Action,
+        /// From the sense message (first step: the process start) to the answer, in µs.
+        answer_us: u64,
+        /// CPU time of every process of the bot over the step, in µs.
+        cpu_us: Option<u64>,
+    },
+    /// The bot failed: timeout, crash, protocol error or a limit.
+    Fault(MatchStatus, Failure),
+}
+
+/// How the bot ended.
+#[derive(Debug, Default)]
+pub struct Ended {
+    /// The outer process's exit status, if it ended in time.
+    pub exit: Option<std::process::ExitStatus>,
+    /// The end of its stderr.
+    pub stderr_tail: String,
+    /// CPU time of all its processes over the match, in ms.
+    pub cpu_ms: Option<u64>,
+}
+
+/// A running bot and its pipes.
+pub struct Session {
+    process: BotProcess,
+    stdin: ChildStdin,
+    replies: framing::ReplyReader<tokio::process::ChildStdout>,
+    stderr: tokio::task::JoinHandle<String>,
+    started: Instant,
+    limits: Limits,
+    cpu_mark: Option<u64>,
+    watchdog: tokio::time::Interval,
+}
+
+impl Session {
+    /// Starts the bot and sends it the start message.
+    ///
+    /// # Errors
+    /// The failure to record when it cannot be started or refuses the start message.
+    pub fn start(launch: &process::Launch<'_>, limits: Limits) -> Result<Session, Failure> {
+        let started = Instant::now();
+        let mut process = process::spawn(launch).map_err(|e| Failure {
+            reason: e.to_string(),
+            ..Failure::default()
+        })?;
+        // The pipes were requested in `spawn`; their absence would be a bug there.
+        let stdin = process
+            .child
+            .stdin
+            .take()
+            .expect("stdin is piped by process::spawn");
+        let stdout = process
+            .child
+            .stdout
+            .take()
+            .expect("stdout is piped by process::spawn");
+        let stderr = process
+            .child
+            .stderr
+            .take()
+            .expect("stderr is piped by process::spawn");
+        let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
+        watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        Ok(Session {
+            stderr: tokio::spawn(framing::read_tail(stderr, framing::STDERR_TAIL_BYTES)),
+            replies: framing::reply_reader(stdout),
+            stdin,
+            started,
+            limits,
+            cpu_mark: Some(0),
+            watchdog,
+            process,
+        })
+    }
+
+    /// The bot's pid (its process group id).
+    pub fn pid(&self) -> Option<u32> {
+        self.process.pid
+    }
+
+    /// Sends `message` within the startup limit (the start message).
+    pub async fn greet(&mut self, message: &ServerMessage) -> Result<(), (MatchStatus, Failure)> {
+        let deadline = self
+            .limits
+            .startup_timeout
+            .map(|l| (self.started + l).into());
+        send(&mut self.stdin, message, deadline)
+            .await
+            .map_err(|e| write_failure(e, 0))
+    }
+
+    /// Asks the bot for one step and waits for its answer under the time limit, looking
+    /// at the whole-match limits meanwhile.
+    pub async fn exchange(&mut self, sense: &Sense) -> Verdict {
+        let sent_at = Instant::now();
+        // PROTOCOL-v1: the first answer is timed from the process start.
+        let (since, limit) = if sense.step == 1 {
+            (self.started, self.limits.startup_timeout)
+        } else {
+            (sent_at, self.limits.move_timeout)
+        };
+        let deadline: Option<tokio::time::Instant> = limit.map(|l| (since + l).into());
+        if let Err(e) = send(&mut self.stdin, &ServerMessage::sense(sense), deadline).await {
+            let (status, failure) = write_failure(e, sense.step);
+            return self.fault_or_limit(status, failure, sense.step);
+        }
+        let next = loop {
+            let read = async {
+                match deadline {
+                    Some(d) => timeout_at(d, self.replies.next()).await,
+                    None => Ok(self.replies.next().await),
+                }
+            };
+            tokio::select! {
+                r = read => break r,
+                _ = self.watchdog.tick() => {
+                    if let Some(kind) = self.process.limit_hit() {
+                        return self.limit_fault(kind, sense.step);
+                    }
+                }
+            }
+        };
+        let line = match next {
+            Err(_) => {
+                let what = if sense.step == 1 { "startup" } else { "move" };
+                let ms = limit.map_or(0, |l| l.as_millis());
+                let reason = format!(
+                    "no answer to step {} within the {what} limit of {ms} ms",
+                    sense.step
+                );
+                return self.fault_or_limit(
+                    MatchStatus::Timeout,
+                    failure(reason, sense.step),
+                    sense.step,
+                );
+            }
+            Ok(None) => {
+                let reason = format!(
+                    "the bot closed its stdout (or exited) before answering step {}",
+                    sense.step
+                );
+                return self.fault_or_limit(
+                    MatchStatus::Crashed,
+                    failure(reason, sense.step),
+                    sense.step,
+                );
+            }
+            Ok(Some(Err(AnyDelimiterCodecError::MaxChunkLengthExceeded))) => {
+                let line = self.replies.read_buffer().to_vec();
+                return protocol_fault(ProtocolError::LineTooLong, &line, sense.step);
+            }
+            Ok(Some(Err(AnyDelimiterCodecError::Io(e)))) => {
+                let reason = format!("reading the bot's stdout failed: {e}");
+                return self.fault_or_limit(
+                    MatchStatus::Crashed,
+                    failure(reason, sense.step),
+                    sense.step,
+                );
+            }
+            Ok(Some(Ok(line))) => line,
+        };
+        let answer_us = since.elapsed().as_micros() as u64;
+        let cpu_now = self.process.cpu_us();
+        let cpu_us = match (self.cpu_mark, cpu_now) {
+            (Some(before), Some(now)) => Some(now.saturating_sub(before)),
+            _ => None,
+        };
+        self.cpu_mark = cpu_now;
+        match crate::protocol::decode_reply(&line) {
+            Ok(action) => Verdict::Answer {
+                action,
+                answer_us,
+                cpu_us,
+            },
+            Err(e) => protocol_fault(e, &line, sense.step),
+        }
+    }
+
+    /// A limit hit explains a crash or a timeout better than the symptom does.
+    fn fault_or_limit(&self, status: MatchStatus, failure: Failure, step: u32) -> Verdict {
+        match self.process.limit_hit() {
+            Some(kind) => self.limit_fault(kind, step),
+            None => Verdict::Fault(status, failure),
+        }
+    }
+
+    /// The verdict for a limit the bot went over at `step`.
+    pub fn limit_fault(&self, kind: LimitKind, step: u32) -> Verdict {
+        let (status, failure) = limit_failure(kind, &self.limits, step);
+        Verdict::Fault(status, failure)
+    }
+
+    /// The limit the bot has gone over, if any (for the check at the end of a match).
+    pub fn limit_hit(&self) -> Option<LimitKind> {
+        self.process.limit_hit()
+    }
+
+    /// Sends the end message, closes stdin, gives the bot [`EXIT_GRACE`] to exit, then
+    /// kills every process it has left and reaps it.
+    pub async fn finish(mut self, end: &ServerMessage) -> Ended {
+        let grace = tokio::time::Instant::now() + EXIT_GRACE;
+        // Without a cgroup the CPU time is read from live processes: read it now too.
+        let cpu_before = self.process.cpu_us();
+        let _ = send(&mut self.stdin, end, Some(grace)).await;
+        drop(self.stdin);
+        let status = timeout_at(grace, self.process.child.wait())
+            .await
+            .ok()
+            .and_then(Result::ok);
+        let cpu_us = match (cpu_before, self.process.cpu_us()) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+        // Kill everything even when the bot exited: its children may linger.
+        self.process.kill_all();
+        let exit = match status {
+            Some(s) => Some(s),
+            None => self.process.child.wait().await.ok(),
+        };
+        let stderr_tail = match tokio::time::timeout(EXIT_GRACE, self.stderr).await {
+            Ok(Ok(tail)) => tail,
+            _ => String::from("[stderr could not be read to its end]"),
+        };
+        Ended {
+            exit,
+            stderr_tail,
+            cpu_ms: cpu_us.map(|us| us / 1000),
+        }
+    }
+}
+
+/// The status and failure for a limit the bot went over.
+pub fn limit_failure(kind: LimitKind, limits: &Limits, step: u32) -> (MatchStatus, Failure) {
+    let (status, name, value, unit, what) = match kind {
+        LimitKind::Memory => (
+            MatchStatus::MemoryLimit,
+            "memory",
+            limits.memory_limit_mb.unwrap_or(0),
+            "MiB",
+            "the bot's processes together held more memory than",
+        ),
+        LimitKind::Processes => (
+            MatchStatus::ProcessLimit,
+            "processes",
+            u64::from(limits.process_limit.unwrap_or(0)),
+            "processes",
+            "the bot tried to run more processes and threads at once than",
+        ),
+        LimitKind::Scratch => (
+            MatchStatus::ScratchLimit,
+            "scratch",
+            limits.scratch_mb,
+            "MiB",
+            "the bot filled its scratch area of",
+        ),
+    };
+    let mut f = failure(format!("{what} the limit of {value} {unit}"), step);
+    f.limit = Some(LimitHit {
+        name: name.into(),
+        value,
+        unit: unit.into(),
+    });
+    (status, f)
+}
+
+fn failure(reason: String, step: u32) -> Failure {
+    Failure {
+        reason,
+        step: Some(step),
+        ..Failure::default()
+    }
+}
+
+fn protocol_fault(e: ProtocolError, line: &[u8], step: u32) -> Verdict {
+    let mut f = failure(e.to_string(), step);
+    f.line = Some(excerpt(line, EXCERPT_BYTES));
+    Verdict::Fault(MatchStatus::ProtocolError, f)
+}
+
+/// Writes one message line to the bot, within `deadline` if given.
+async fn send(
+    stdin: &mut ChildStdin,
+    message: &ServerMessage,
+    deadline: Option<tokio::time::Instant>,
+) -> std::io::Result<()> {
+    let line = message.to_line();
+    let write = async {
+        stdin.write_all(line.as_bytes()).await?;
+        stdin.flush().await
+    };
+    match deadline {
+        Some(d) => timeout_at(d, write).await.unwrap_or_else(|_| {
+            Err(std::io::Error::new(
+                std::io::ErrorKind::TimedOut,
+                "the bot did not read its stdin in time",
+            ))
+        }),
+        None => write.await,
+    }
+}
+
+fn write_failure(e: std::io::Error, step: u32) -> (MatchStatus, Failure) {
+    let status = if e.kind() == std::io::ErrorKind::TimedOut {
+        MatchStatus::Timeout
+    } else {
+        MatchStatus::Crashed
+    };
+    let mut f = failure(format!("could not write to the bot's stdin: {e}"), step);
+    if step == 0 {
+        f.step = None;
+    }
+    (status, f)
+}
