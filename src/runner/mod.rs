@@ -193,16 +193,44 @@ pub async fn run_match(
     };
     let ended = session.finish(&end).await;
     if let Some((_, mut f)) = failure {
-        if let Some(status) = ended.exit {
-            use std::os::unix::process::ExitStatusExt;
-            f.exit_code = status.code();
-            f.signal = status.signal();
+        (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);
+        if let Some(reason) = setup_failure(&ended, sandbox) {
+            // The jail could not start the bot's program: it never ran.
+            f.reason = format!("could not start the bot: {reason}");
+            f.step = None;
+            record.total_steps = 0;
         }
         record.error = Some(f);
     }
     record.stderr_tail = ended.stderr_tail;
     record.timings = timings(&record.trace, ended.cpu_ms, started);
     record
+}
+
+/// The bot's exit code or signal. In the sandbox the process is bubblewrap, which exits
+/// with the bot's code, or 128 + the signal that killed it.
+fn exit_of(exit: Option<std::process::ExitStatus>, sandbox: &Sandbox) -> (Option<i32>, Option<i32>) {
+    use std::os::unix::process::ExitStatusExt;
+    let Some(status) = exit else { return (None, None) };
+    match (sandbox, status.code()) {
+        (Sandbox::Full(_), Some(code)) if (129..=159).contains(&code) => (None, Some(code - 128)),
+        _ => (status.code(), status.signal()),
+    }
+}
+
+/// The jail's own message when it could not start the bot's program.
+fn setup_failure(ended: &session::Ended, sandbox: &Sandbox) -> Option<String> {
+    if !matches!(sandbox, Sandbox::Full(_))
+        || ended.exit.and_then(|e| e.code()) != Some(sandbox::jail::SETUP_FAILED)
+    {
+        return None;
+    }
+    ended
+        .stderr_tail
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("mazearena sandbox: "))
+        .map(str::to_string)
 }
 
 fn new_record(maze: &Maze, seed: u64, limits: &Limits, sandbox: &Sandbox) -> MatchRecord {

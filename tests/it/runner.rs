@@ -6,7 +6,7 @@ use std::time::Duration;
 use mazearena::engine::{Action, solver};
 use mazearena::runner::{BotSpec, Limits, MatchRecord, MatchStatus, run_match};
 
-use crate::support::{classic, fixture_bot, live_group_members, root};
+use crate::support::{classic, fixture_bot, live_group_members, root, sandbox};
 
 fn limits() -> Limits {
     Limits {
@@ -17,7 +17,7 @@ fn limits() -> Limits {
 }
 
 async fn play(bot: BotSpec, limits: Limits) -> MatchRecord {
-    let record = run_match(&bot, &classic(1), 7, limits, |_| {}).await;
+    let record = run_match(&bot, &classic(1), 7, limits, &sandbox(), |_| {}).await;
     let pgid = record.bot_pid.expect("the bot was started");
     assert_eq!(
         live_group_members(pgid),
@@ -197,7 +197,7 @@ async fn a_command_that_cannot_start_has_crashed() {
         command: "./no-such-bot --fast".into(),
         dir: root().to_path_buf(),
     };
-    let r = run_match(&bot, &classic(1), 0, limits(), |_| {}).await;
+    let r = run_match(&bot, &classic(1), 0, limits(), &sandbox(), |_| {}).await;
     assert_eq!(r.status, MatchStatus::Crashed);
     assert!(reason(&r).contains("could not start"), "{}", reason(&r));
     assert_eq!(r.total_steps, 0);
@@ -263,6 +263,7 @@ async fn many_matches_run_at_once() {
                     &classic(1),
                     seed,
                     limits(),
+                    &sandbox(),
                     |_| {},
                 )
                 .await
@@ -283,7 +284,18 @@ async fn a_memory_hog_is_stopped_by_the_memory_limit() {
         ..limits()
     };
     let r = play(fixture_bot("memory_hog", &[]), limits).await;
-    assert_eq!(r.status, MatchStatus::Crashed);
-    assert!(r.stderr_tail.contains("MemoryError"), "{}", r.stderr_tail);
+    match sandbox() {
+        // All processes together: the cgroup's OOM kill (or the watchdog) ends it.
+        mazearena::runner::Sandbox::Full(_) => {
+            assert_eq!(r.status, MatchStatus::MemoryLimit, "{:?}", r.error);
+            let hit = r.error.as_ref().unwrap().limit.as_ref().unwrap();
+            assert_eq!((hit.name.as_str(), hit.value), ("memory", 512));
+        }
+        // Per process: the address-space limit makes the allocation fail.
+        mazearena::runner::Sandbox::None => {
+            assert_eq!(r.status, MatchStatus::Crashed);
+            assert!(r.stderr_tail.contains("MemoryError"), "{}", r.stderr_tail);
+        }
+    }
     assert_eq!(r.limits.memory_limit_mb, Some(512));
 }

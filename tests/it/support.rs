@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use mazearena::engine::{Maze, mazefile};
-use mazearena::runner::BotSpec;
+use mazearena::runner::{BotSpec, Sandbox};
 
 /// The crate root.
 pub fn root() -> &'static Path {
@@ -41,10 +41,65 @@ pub fn fixture_bot(name: &str, args: &[&str]) -> BotSpec {
     }
 }
 
-/// Runs the real `mazearena` binary with `args` from the crate root.
+/// The sandbox bots run under in the tests: the full one where it works. In CI
+/// (`CI=true`) a missing sandbox is a failure; elsewhere the tests go on without it and
+/// say so once.
+pub fn sandbox() -> Sandbox {
+    static SANDBOX: std::sync::OnceLock<Sandbox> = std::sync::OnceLock::new();
+    SANDBOX
+        .get_or_init(|| {
+            match Sandbox::full(Path::new(env!("CARGO_BIN_EXE_mazearena")), &[]) {
+                Ok(s) => s,
+                Err(e) if std::env::var("CI").is_ok_and(|v| v == "true") => {
+                    panic!("CI=true and the sandbox is missing: {e}")
+                }
+                Err(e) => {
+                    eprintln!("NOTE: bots run without the sandbox in these tests: {e}");
+                    Sandbox::None
+                }
+            }
+        })
+        .clone()
+}
+
+/// The full sandbox, or `None` after printing why a sandbox test is skipped (outside
+/// CI only: in CI [`sandbox`] panics instead).
+pub fn full_sandbox(test: &str) -> Option<Sandbox> {
+    match sandbox() {
+        Sandbox::None => {
+            eprintln!("SKIPPED {test}: the sandbox is not available here (see `mazearena doctor`)");
+            None
+        }
+        s => Some(s),
+    }
+}
+
+/// Live processes (not zombies) whose command line contains `needle`.
+pub fn processes_matching(needle: &str) -> Vec<u32> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir("/proc").into_iter().flatten().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
+            continue;
+        };
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        let zombie = std::fs::read_to_string(format!("/proc/{pid}/stat"))
+            .is_ok_and(|s| s.rsplit_once(')').is_some_and(|(_, r)| r.trim_start().starts_with('Z')));
+        if cmd.contains(needle) && !zombie && pid != std::process::id() {
+            found.push(pid);
+        }
+    }
+    found
+}
+
+/// Runs the real `mazearena` binary with `args` from the crate root (bots in the
+/// tests' [`sandbox`]).
 pub fn mazearena(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mazearena"))
         .args(args)
+        .env("MAZEARENA_SANDBOX", sandbox().level())
         .current_dir(root())
         .output()
         .expect("the mazearena binary runs")
@@ -112,6 +167,7 @@ impl TestServer {
             .arg(dir.join("data"))
             .args(extra)
             .env("MAZEARENA_ADMIN_TOKEN", ADMIN)
+            .env("MAZEARENA_SANDBOX", sandbox().level())
             .current_dir(root())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::null())
@@ -181,6 +237,11 @@ impl TestServer {
     /// The raw client, for unusual requests.
     pub fn client(&self) -> &reqwest::Client {
         &self.client
+    }
+
+    /// The server's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
     }
 
     /// Kills the server with SIGKILL, as a crash would.
