@@ -209,9 +209,14 @@ pub async fn run_match(
 
 /// The bot's exit code or signal. In the sandbox the process is bubblewrap, which exits
 /// with the bot's code, or 128 + the signal that killed it.
-fn exit_of(exit: Option<std::process::ExitStatus>, sandbox: &Sandbox) -> (Option<i32>, Option<i32>) {
+fn exit_of(
+    exit: Option<std::process::ExitStatus>,
+    sandbox: &Sandbox,
+) -> (Option<i32>, Option<i32>) {
     use std::os::unix::process::ExitStatusExt;
-    let Some(status) = exit else { return (None, None) };
+    let Some(status) = exit else {
+        return (None, None);
+    };
     match (sandbox, status.code()) {
         (Sandbox::Full(_), Some(code)) if (129..=159).contains(&code) => (None, Some(code - 128)),
         _ => (status.code(), status.signal()),

@@ -133,7 +133,15 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                     })?;
             let jail = jail::JailArgs {
                 uid: uid.as_ref().map(UidLease::uid),
-                nproc: launch.process_limit,
+                // With a cgroup, its count is the limit that is seen being hit; the
+                // uid's own count stays a little above it as a second wall.
+                nproc: launch.process_limit.map(|n| {
+                    if cgroup.is_some() {
+                        n + 2 * BWRAP_PROCESSES
+                    } else {
+                        n
+                    }
+                }),
                 fsize: Some(launch.scratch_bytes),
                 address_space: None,
                 command: words.iter().map(Into::into).collect(),

@@ -3,6 +3,7 @@
 mod api;
 mod bots;
 mod cli;
+mod hostile;
 mod mazefiles;
 mod referee;
 mod runner;

@@ -47,8 +47,8 @@ pub fn fixture_bot(name: &str, args: &[&str]) -> BotSpec {
 pub fn sandbox() -> Sandbox {
     static SANDBOX: std::sync::OnceLock<Sandbox> = std::sync::OnceLock::new();
     SANDBOX
-        .get_or_init(|| {
-            match Sandbox::full(Path::new(env!("CARGO_BIN_EXE_mazearena")), &[]) {
+        .get_or_init(
+            || match Sandbox::full(Path::new(env!("CARGO_BIN_EXE_mazearena")), &[]) {
                 Ok(s) => s,
                 Err(e) if std::env::var("CI").is_ok_and(|v| v == "true") => {
                     panic!("CI=true and the sandbox is missing: {e}")
@@ -57,8 +57,8 @@ pub fn sandbox() -> Sandbox {
                     eprintln!("NOTE: bots run without the sandbox in these tests: {e}");
                     Sandbox::None
                 }
-            }
-        })
+            },
+        )
         .clone()
 }
 
@@ -85,8 +85,10 @@ pub fn processes_matching(needle: &str) -> Vec<u32> {
             continue;
         };
         let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
-        let zombie = std::fs::read_to_string(format!("/proc/{pid}/stat"))
-            .is_ok_and(|s| s.rsplit_once(')').is_some_and(|(_, r)| r.trim_start().starts_with('Z')));
+        let zombie = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+            s.rsplit_once(')')
+                .is_some_and(|(_, r)| r.trim_start().starts_with('Z'))
+        });
         if cmd.contains(needle) && !zombie && pid != std::process::id() {
             found.push(pid);
         }

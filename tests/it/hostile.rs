@@ -1,0 +1,392 @@
+//! The hostile-bot suite: one fixture bot per attack (tests/fixtures/bots/hostile), run
+//! through the real CLI and a real server in the full sandbox. Each attack must fail (the
+//! bot reports `HOSTILE BLOCKED`, never `HOSTILE LEAK`) or end as a recorded limit, and no
+//! process of the bot may be left.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serde_json::{Value, json};
+
+use crate::support::{
+    ADMIN, TestServer, full_sandbox, mazearena, processes_matching, root, shared_maze,
+    simple_bot_files,
+};
+
+const HOSTILE: &str = "tests/fixtures/bots/hostile";
+
+fn maze() -> PathBuf {
+    shared_maze("classic/test_maze_01.txt")
+}
+
+/// Plays `script args` from the hostile folder through `mazearena run --json`.
+fn attack(script: &str, args: &[&str], extra: &[&str]) -> Value {
+    let mut bot = format!("python3 {script}");
+    for a in args {
+        bot.push(' ');
+        bot.push_str(&shlex::try_quote(a).unwrap());
+    }
+    let maze = maze();
+    let mut cli = vec![
+        "run",
+        "--maze",
+        maze.to_str().unwrap(),
+        "--bot",
+        &bot,
+        "--bot-dir",
+        HOSTILE,
+        "--json",
+    ];
+    cli.extend_from_slice(extra);
+    let out = mazearena(&cli);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let record: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(record["limits"]["sandbox"], "full");
+    assert!(
+        processes_matching(&bot).is_empty(),
+        "processes of {bot} outlived the match: {:?}",
+        processes_matching(&bot)
+    );
+    record
+}
+
+fn stderr(r: &Value) -> &str {
+    r["stderr_tail"].as_str().unwrap_or("")
+}
+
+/// No attack worked, and at least `blocked` were seen to fail.
+fn contained(r: &Value, blocked: usize) {
+    let log = stderr(r);
+    assert!(!log.contains("HOSTILE LEAK"), "an attack worked:\n{log}");
+    assert!(
+        log.matches("HOSTILE BLOCKED").count() >= blocked,
+        "fewer than {blocked} attacks were seen to fail:\n{log}"
+    );
+}
+
+#[test]
+fn a_bot_cannot_read_the_database_the_data_dir_other_bots_or_the_maze() {
+    let Some(_) = full_sandbox("hostile read") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("mazearena.db");
+    std::fs::write(&db, "SECRET").unwrap();
+    let other = tmp.path().join("data/bots/7/1");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("bot.py"), "SECRET").unwrap();
+    let maze = maze();
+    let paths = [&db, &tmp.path().join("data"), &other.join("bot.py"), &maze];
+    let args: Vec<&str> = paths.iter().map(|p| p.to_str().unwrap()).collect();
+    let r = attack("read_file.py", &args, &[]);
+    contained(&r, 4);
+    assert_eq!(r["status"], "step_limit");
+}
+
+#[test]
+fn a_bot_cannot_read_the_servers_environment_nor_see_its_processes() {
+    let Some(_) = full_sandbox("hostile environ") else {
+        return;
+    };
+    let r = attack("parent_environ.py", &[], &[]);
+    contained(&r, 1);
+    let r = attack("list_processes.py", &["mazearena", "cargo"], &[]);
+    contained(&r, 1);
+    // bubblewrap's init, the bot: the namespace holds nothing else.
+    let seen = stderr(&r)
+        .split("count=")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|n| n.parse::<u32>().ok())
+        .unwrap();
+    assert!(seen <= 3, "{}", stderr(&r));
+}
+
+#[test]
+fn a_bot_cannot_signal_the_server_or_another_bot() {
+    let Some(_) = full_sandbox("hostile signal") else {
+        return;
+    };
+    let mut victims: Vec<std::process::Child> = (0..2)
+        .map(|_| {
+            std::process::Command::new("sleep")
+                .arg("60")
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let pids: Vec<String> = victims.iter().map(|c| c.id().to_string()).collect();
+    let args: Vec<&str> = pids.iter().map(String::as_str).collect();
+    let r = attack("signal_pid.py", &args, &[]);
+    contained(&r, 2);
+    for v in &mut victims {
+        assert!(v.try_wait().unwrap().is_none(), "a victim was killed");
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", v.id())).unwrap();
+        let state = stat.rsplit_once(')').unwrap().1.trim_start().chars().next();
+        assert_ne!(state, Some('T'), "a victim was stopped");
+        let _ = v.kill();
+        let _ = v.wait();
+    }
+}
+
+#[test]
+fn setsid_and_a_double_fork_do_not_outlive_the_match() {
+    let Some(_) = full_sandbox("hostile setsid") else {
+        return;
+    };
+    let r = attack("setsid_escape.py", &["4171"], &[]);
+    assert!(stderr(&r).contains("grandchild"), "{}", stderr(&r));
+    assert!(processes_matching("sleep 4171").is_empty());
+}
+
+#[test]
+fn forking_300_ends_at_the_process_limit() {
+    let Some(_) = full_sandbox("hostile fork") else {
+        return;
+    };
+    let r = attack("fork_many.py", &["300"], &[]);
+    assert_eq!(r["status"], "process_limit", "{r}");
+    assert_eq!(r["error"]["limit"]["name"], "processes");
+    assert_eq!(r["error"]["limit"]["value"], 64);
+    contained(&r, 0);
+}
+
+#[test]
+fn children_holding_4_5_gib_end_at_the_memory_limit() {
+    let Some(_) = full_sandbox("hostile memory") else {
+        return;
+    };
+    let r = attack("memory_children.py", &["3", "1536"], &[]);
+    assert_eq!(r["status"], "memory_limit", "{r}");
+    assert_eq!(r["error"]["limit"]["name"], "memory");
+    assert_eq!(r["error"]["limit"]["value"], 1024);
+}
+
+#[test]
+fn spinning_children_are_counted_in_the_cpu_time_and_die_with_the_match() {
+    let Some(_) = full_sandbox("hostile spin") else {
+        return;
+    };
+    let r = attack("spin_children.py", &["4"], &[]);
+    assert_eq!(r["status"], "step_limit", "{r}");
+    let cpu = r["timings"]["bot_cpu_ms"].as_u64().unwrap();
+    let wall = r["timings"]["wall_ms"].as_u64().unwrap();
+    // Four spinners under a one-core quota use about a core for the whole match.
+    assert!(
+        cpu * 2 >= wall,
+        "cpu {cpu} ms over a wall time of {wall} ms"
+    );
+}
+
+#[test]
+fn filling_the_scratch_area_ends_at_the_scratch_limit_and_leaves_nothing() {
+    let Some(_) = full_sandbox("hostile scratch") else {
+        return;
+    };
+    let r = attack("fill_scratch.py", &["200"], &["--scratch-mb", "16"]);
+    assert_eq!(r["status"], "scratch_limit", "{r}");
+    assert!(stderr(&r).contains("Errno 28"), "{}", stderr(&r));
+    assert!(!root().join(HOSTILE).join("fill_scratch.bin").exists());
+}
+
+#[test]
+fn a_bot_cannot_write_outside_its_scratch_area() {
+    let Some(_) = full_sandbox("hostile write") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let next_to = root().join(HOSTILE).join("pwned.txt");
+    let outside = tmp.path().join("pwned.txt");
+    let args = [
+        next_to.to_str().unwrap(),
+        outside.to_str().unwrap(),
+        "/etc/mazearena-pwned",
+        "_hostile.py",
+        "/usr/local/mazearena-pwned",
+    ];
+    let before = std::fs::read(root().join(HOSTILE).join("_hostile.py")).unwrap();
+    let r = attack("write_outside.py", &args, &[]);
+    contained(&r, 5);
+    let fixed = [
+        Path::new("/etc/mazearena-pwned"),
+        Path::new("/usr/local/mazearena-pwned"),
+    ];
+    for p in [next_to.as_path(), outside.as_path()]
+        .into_iter()
+        .chain(fixed)
+    {
+        assert!(!p.exists(), "{} was written", p.display());
+    }
+    assert_eq!(
+        std::fs::read(root().join(HOSTILE).join("_hostile.py")).unwrap(),
+        before
+    );
+}
+
+#[test]
+fn a_bot_cannot_reach_a_loopback_listener() {
+    let Some(_) = full_sandbox("hostile network") else {
+        return;
+    };
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    listener.set_nonblocking(true).unwrap();
+    let port = listener.local_addr().unwrap().port().to_string();
+    let r = attack("network.py", &[&port], &[]);
+    contained(&r, 1);
+    assert!(listener.accept().is_err(), "the bot connected");
+}
+
+#[test]
+fn nothing_a_bot_writes_survives_its_match() {
+    let Some(_) = full_sandbox("hostile keep") else {
+        return;
+    };
+    for _ in 0..2 {
+        let r = attack("keep_file.py", &[], &[]);
+        contained(&r, 0);
+        assert!(stderr(&r).contains("HOSTILE INFO none"), "{}", stderr(&r));
+    }
+    assert!(!root().join(HOSTILE).join("kept.txt").exists());
+}
+
+async fn register(server: &TestServer, name: &str, command: &str, files: Value) -> (i64, String) {
+    let (status, body) = server
+        .post(
+            "/api/bots",
+            json!({"name": name, "command": command, "files": files}),
+            None,
+        )
+        .await;
+    assert_eq!(status, 201, "{body}");
+    (
+        body["bot_id"].as_i64().unwrap(),
+        body["owner_token"].as_str().unwrap().to_string(),
+    )
+}
+
+fn hostile_files(script: &str) -> Value {
+    let dir = root().join(HOSTILE);
+    json!({
+        script: std::fs::read_to_string(dir.join(script)).unwrap(),
+        "_hostile.py": std::fs::read_to_string(dir.join("_hostile.py")).unwrap(),
+    })
+}
+
+async fn finished(server: &TestServer, id: i64) -> Value {
+    for _ in 0..600 {
+        let (_, m) = server.get(&format!("/api/matches/{id}"), None).await;
+        if !matches!(m["status"].as_str(), Some("queued" | "running")) {
+            return m;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    panic!("match {id} did not end");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn hostile_bots_on_a_real_server_are_contained_and_an_honest_match_is_unaffected() {
+    let Some(_) = full_sandbox("hostile server") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let server = TestServer::start(tmp.path(), &["--jobs", "2"]);
+    let (status, health) = server.get("/healthz", None).await;
+    assert_eq!((status, health["sandbox"].as_str()), (200, Some("full")));
+    let server_pid = server.pid().to_string();
+    let db = tmp.path().join("mazearena.db").display().to_string();
+    let attackers = [
+        ("killer", "signal_pid.py", server_pid.as_str(), "step_limit"),
+        ("forker", "fork_many.py", "301", "process_limit"),
+        ("hog", "memory_children.py", "3 1537", "memory_limit"),
+        ("spinner", "spin_children.py", "5", "step_limit"),
+        ("reader", "read_file.py", db.as_str(), "step_limit"),
+    ];
+    let (honest, honest_token) = register(
+        &server,
+        "honest",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let layout = std::fs::read_to_string(shared_maze("classic/test_maze_02.txt")).unwrap();
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "c2", "layout": layout, "hidden": false}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    let maze = v["maze_id"].as_i64().unwrap();
+    let mut matches = Vec::new();
+    for (name, script, args, want) in attackers {
+        let command = format!("python3 {script} {args}");
+        let (id, token) = register(&server, name, &command, hostile_files(script)).await;
+        let (s, m) = server
+            .post(
+                "/api/matches",
+                json!({"bot_id": id, "maze_id": maze, "seed": 3}),
+                Some(&token),
+            )
+            .await;
+        assert_eq!(s, 202, "{m}");
+        // An honest match beside every attacker.
+        let (s, h) = server
+            .post(
+                "/api/matches",
+                json!({"bot_id": honest, "maze_id": maze, "seed": 3}),
+                Some(&honest_token),
+            )
+            .await;
+        assert_eq!(s, 202, "{h}");
+        matches.push((m["match_id"].as_i64().unwrap(), want, token));
+        matches.push((
+            h["match_id"].as_i64().unwrap(),
+            "finished",
+            honest_token.clone(),
+        ));
+    }
+    let mut honest_scores = Vec::new();
+    for (id, want, token) in &matches {
+        let m = finished(&server, *id).await;
+        assert_eq!(m["status"], *want, "{m}");
+        let (_, log) = server
+            .get(&format!("/api/matches/{id}/log"), Some(token))
+            .await;
+        let tail = log["stderr_tail"].as_str().unwrap_or("");
+        assert!(!tail.contains("HOSTILE LEAK"), "{tail}");
+        if *want == "finished" {
+            honest_scores.push(m["score"].as_f64().unwrap());
+        }
+    }
+    // The honest bot scores exactly as it does alone (the CLI, same maze and seed).
+    let alone = mazearena(&[
+        "run",
+        "--maze",
+        shared_maze("classic/test_maze_02.txt").to_str().unwrap(),
+        "--bot",
+        "python3 bots/python/simple_bot.py",
+        "--seed",
+        "3",
+        "--json",
+    ]);
+    let alone: Value = serde_json::from_slice(&alone.stdout).unwrap();
+    let alone = alone["score"].as_f64().unwrap();
+    assert!(
+        honest_scores.iter().all(|s| *s == alone),
+        "{honest_scores:?} vs {alone}"
+    );
+    let (status, _) = server.get("/healthz", None).await;
+    assert_eq!(status, 200, "the server stopped answering");
+    for (_, script, args, _) in attackers {
+        let command = format!("python3 {script} {args}");
+        assert!(
+            processes_matching(&command).is_empty(),
+            "{command} left processes"
+        );
+    }
+}
