@@ -18,6 +18,7 @@ const ETC_FILES: &[&str] = &[
     "/etc/alternatives",
     "/etc/localtime",
     "/etc/nsswitch.conf",
+    "/etc/ssl/openssl.cnf",
 ];
 
 /// Environment variables passed on to bots (all others are cleared).
