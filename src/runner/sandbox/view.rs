@@ -207,6 +207,27 @@ pub fn bwrap_args(
     }
     push(&[&"--symlink", &tmp, &"/tmp"]);
     push(&[&"--ro-bind", &full.helper, &HELPER_IN_SANDBOX]);
+    // bubblewrap makes the folders above a mount point for root only (0700): open them
+    // to the match's uid, which must reach the runtimes (e.g. /root/.pyenv) and /etc.
+    let mut parents: Vec<PathBuf> = Vec::new();
+    let dests = ETC_FILES
+        .iter()
+        .map(PathBuf::from)
+        .chain(full.runtime_roots.iter().cloned())
+        .chain([PathBuf::from(HELPER_IN_SANDBOX)]);
+    for dest in dests {
+        for a in dest.ancestors().skip(1) {
+            if a != Path::new("/") && !parents.iter().any(|p| p == a) {
+                parents.push(a.to_path_buf());
+            }
+        }
+    }
+    parents.retain(|p| !full.runtime_roots.iter().any(|r| p.starts_with(r)));
+    for p in &parents {
+        if p.exists() || p.starts_with("/run") {
+            push(&[&"--chmod", &"0755", p]);
+        }
+    }
     push(&[&"--clearenv"]);
     for (k, v) in &full.env {
         push(&[&"--setenv", k, v]);
