@@ -89,6 +89,10 @@ impl Metrics {
             "timeout",
             "crashed",
             "protocol_error",
+            "memory_limit",
+            "process_limit",
+            "scratch_limit",
+            "aborted",
         ] {
             let n = counts
                 .iter()

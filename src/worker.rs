@@ -4,7 +4,8 @@
 //! Used by the server and by `mazearena tournament`. A worker keeps its lease alive while
 //! a match runs; a match whose worker died goes back to the queue when its lease expires
 //! (the reaper), so nothing accepted is ever lost, and the lease check on writing makes
-//! sure nothing is recorded twice.
+//! sure nothing is recorded twice. A match whose lease keeps expiring is retried at most
+//! [`crate::storage::matches::MAX_MATCH_RETRIES`] times, then recorded as `aborted`.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -100,10 +101,18 @@ pub fn spawn_workers(
                 _ = stop.cancelled() => break,
                 _ = tick.tick() => {}
             }
-            match reaper_storage.requeue_expired().await {
-                Ok(0) => {}
-                Ok(n) => {
-                    tracing::warn!(count = n, "re-queued matches whose worker stopped");
+            match reaper_storage.reap_expired().await {
+                Ok(r) if r.requeued.is_empty() && r.aborted.is_empty() => {}
+                Ok(r) => {
+                    if !r.requeued.is_empty() {
+                        tracing::warn!(matches = ?r.requeued, "re-queued matches whose worker stopped");
+                    }
+                    if !r.aborted.is_empty() {
+                        tracing::warn!(matches = ?r.aborted, "aborted matches that were running each time the server stopped");
+                    }
+                    if !r.paused_bots.is_empty() {
+                        tracing::warn!(bots = ?r.paused_bots, "paused bots whose matches keep aborting");
+                    }
                     wake.notify_waiters();
                 }
                 Err(e) => tracing::error!(cause = %e, "could not re-queue expired leases"),
@@ -212,7 +221,8 @@ impl Worker {
                     }
                 }
                 _ = self.shutdown.abort.cancelled() => {
-                    // Dropping the match future kills the bot's process group.
+                    // Dropping the match future kills the bot's process group. A graceful
+                    // release does not count against the match's retries.
                     if let Err(e) = self.storage.release_match(job.match_id, &self.owner).await {
                         tracing::error!(cause = %e, "could not re-queue an interrupted match; its lease will expire");
                     }

@@ -1,4 +1,5 @@
-//! Bots: register (with files), upload new versions, list, show.
+//! Bots: register (with files), upload new versions (which resumes a paused bot), list,
+//! show, and resume a paused bot (admin).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -27,6 +28,7 @@ pub(super) fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(create_bot, list_bots))
         .routes(routes!(get_bot))
         .routes(routes!(create_bot_version))
+        .routes(routes!(resume_bot))
         .layer(DefaultBodyLimit::max(MAX_UPLOAD_BYTES))
 }
 
@@ -105,6 +107,8 @@ pub struct BotView {
     pub command: String,
     /// Registered at (unix ms).
     pub created_at: i64,
+    /// Paused: its matches keep aborting, so no new ones are accepted.
+    pub paused: bool,
 }
 
 /// A bot with all its versions.
@@ -116,6 +120,14 @@ pub struct BotDetail {
     pub name: String,
     /// Registered at (unix ms).
     pub created_at: i64,
+    /// Paused: its matches kept aborting (the server stopped each time they ran), so
+    /// its queued matches were aborted and no new ones are accepted until the admin
+    /// resumes it or a new version is uploaded.
+    pub paused: bool,
+    /// Why it is paused (null when it is not).
+    pub paused_reason: Option<String>,
+    /// When it was paused (unix ms; null when it is not).
+    pub paused_at: Option<i64>,
     /// Every version, oldest first.
     pub versions: Vec<VersionView>,
 }
@@ -178,7 +190,7 @@ async fn create_bot(
     ))
 }
 
-/// Upload a new version of a bot (owner token or admin).
+/// Upload a new version of a bot (owner token or admin); a paused bot is resumed.
 #[utoipa::path(post, path = "/api/bots/{id}/versions", tag = "bots",
     params(("id" = i64, Path, description = "bot id")),
     request_body(content(
@@ -228,6 +240,7 @@ async fn list_bots(State(state): State<AppState>) -> ApiResult<axum::Json<Vec<Bo
     Ok(axum::Json(
         bots.into_iter()
             .map(|b| BotView {
+                paused: b.is_paused(),
                 bot_id: b.bot_id,
                 name: b.name,
                 version: b.version,
@@ -238,7 +251,7 @@ async fn list_bots(State(state): State<AppState>) -> ApiResult<axum::Json<Vec<Bo
     ))
 }
 
-/// A bot and all its versions.
+/// A bot and all its versions, and whether it is paused (with the reason).
 #[utoipa::path(get, path = "/api/bots/{id}", tag = "bots",
     params(("id" = i64, Path, description = "bot id")),
     responses((status = 200, body = BotDetail), (status = 404, body = ErrorBody)))]
@@ -246,18 +259,51 @@ async fn get_bot(
     State(state): State<AppState>,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<BotDetail>> {
+    Ok(axum::Json(bot_detail(&state, id).await?))
+}
+
+/// Resume a paused bot (admin token): its matches are accepted and played again.
+/// Resuming a bot that is not paused changes nothing.
+#[utoipa::path(post, path = "/api/bots/{id}/resume", tag = "bots",
+    params(("id" = i64, Path, description = "bot id")),
+    security(("bearer" = [])),
+    responses(
+        (status = 200, body = BotDetail),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody),
+    ))]
+async fn resume_bot(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<axum::Json<BotDetail>> {
+    caller.require_admin()?;
+    if state.storage.get_bot(id).await?.is_none() {
+        return Err(ApiError::NotFound(format!("no bot {id}")));
+    }
+    if state.storage.resume_bot(id).await? {
+        tracing::info!(bot_id = id, "bot resumed by the admin");
+        state.wake.notify_waiters();
+    }
+    Ok(axum::Json(bot_detail(&state, id).await?))
+}
+
+async fn bot_detail(state: &AppState, id: i64) -> ApiResult<BotDetail> {
     let bot = state
         .storage
         .get_bot(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no bot {id}")))?;
     let versions = state.storage.bot_versions(id).await?;
-    Ok(axum::Json(BotDetail {
+    Ok(BotDetail {
         bot_id: bot.bot_id,
+        paused: bot.is_paused(),
         name: bot.name,
         created_at: bot.created_at,
+        paused_reason: bot.paused_reason,
+        paused_at: bot.paused_at,
         versions: versions.into_iter().map(Into::into).collect(),
-    }))
+    })
 }
 
 /// An upload, whichever way it came.

@@ -1,5 +1,7 @@
-//! The leaderboard: rank, mean score (a did-not-finish counts as 1000), finish rate, mean
-//! ratio of score to the maze's optimum, matches played.
+//! The leaderboard: rank, mean score (a did-not-finish, `aborted` included, counts as
+//! 1000), finish rate, mean ratio of score to the maze's optimum, matches played. For
+//! non-admins the ratio is null whenever a hidden maze is counted: over one hidden maze
+//! it would give the maze's optimum away.
 
 use axum::extract::State;
 use serde::Deserialize;
@@ -8,6 +10,7 @@ use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 use super::AppState;
+use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppQuery, ErrorBody};
 use crate::storage::leaderboard::{Scope, Standing};
 
@@ -32,6 +35,7 @@ pub struct LeaderboardQuery {
     responses((status = 200, body = [Standing]), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
 async fn get_leaderboard(
     State(state): State<AppState>,
+    caller: Caller,
     AppQuery(q): AppQuery<LeaderboardQuery>,
 ) -> ApiResult<axum::Json<Vec<Standing>>> {
     let scope = match (q.tournament, q.scope.as_deref()) {
@@ -55,5 +59,16 @@ async fn get_leaderboard(
         }
     };
     let rows = state.storage.leaderboard(scope).await?;
-    Ok(axum::Json(rows))
+    Ok(axum::Json(for_caller(rows, &caller)))
+}
+
+/// The standings as `caller` may see them: without the score/optimum ratio of a bot
+/// whose counted matches include a hidden maze, unless the caller is the admin.
+pub(super) fn for_caller(mut rows: Vec<Standing>, caller: &Caller) -> Vec<Standing> {
+    if !caller.is_admin() {
+        for row in rows.iter_mut().filter(|r| r.hidden_played > 0) {
+            row.mean_ratio = None;
+        }
+    }
+    rows
 }

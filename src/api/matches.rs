@@ -1,4 +1,9 @@
 //! Matches: queue one (owner or admin), see its result, its replay, and its log.
+//!
+//! A match on a hidden (ranking) maze shows non-admins its status, score and step
+//! counts only: no maze hash or side, no warnings or timings (bot-chosen values), no
+//! replay, and of its log only the status and the failure's step. Its bot could
+//! otherwise print, time or act out the layout it sensed.
 
 use axum::extract::State;
 use axum::http::StatusCode;
@@ -66,7 +71,8 @@ pub struct MatchView {
     pub tournament_id: Option<i64>,
     /// The seed.
     pub seed: i64,
-    /// queued, running, finished, step_limit, timeout, crashed, protocol_error.
+    /// queued, running, finished, step_limit, timeout, crashed, protocol_error,
+    /// memory_limit, process_limit, scratch_limit, aborted.
     pub status: String,
     /// Score when finished.
     pub score: Option<f64>,
@@ -84,6 +90,9 @@ pub struct MatchView {
     pub started_at: Option<i64>,
     /// Finished at (unix ms).
     pub finished_at: Option<i64>,
+    /// Whether the maze is hidden: then `warnings`, `timings`, `maze_hash` and
+    /// `maze_dim` are null unless the caller is the admin.
+    pub maze_hidden: bool,
     /// Lenient-rule warnings.
     #[schema(value_type = Vec<Object>)]
     pub warnings: Value,
@@ -92,6 +101,8 @@ pub struct MatchView {
     pub limits: Value,
     /// SHA-256 of the maze layout.
     pub maze_hash: Option<String>,
+    /// The maze's side.
+    pub maze_dim: Option<i64>,
     /// The referee's version.
     pub engine_version: Option<String>,
     /// Wall time, bot CPU time, answer times.
@@ -119,18 +130,26 @@ pub struct ReplayView {
     pub trace: Value,
 }
 
-/// A match's failure details and the bot's stderr tail (owner or admin).
+/// A match's failure details and the bot's stderr tail (owner or admin). For a hidden
+/// maze's match the owner gets the status and the failure's step only (`redacted`).
 #[derive(Debug, Serialize, ToSchema)]
 pub struct LogView {
     /// Id.
     pub match_id: i64,
-    /// Final status.
+    /// Final status (for a failure, its kind).
     pub status: String,
+    /// The step the failure happened at, when known.
+    pub step: Option<u64>,
+    /// True when `error` and `stderr_tail` are left out: a hidden maze's match, and
+    /// the caller is not the admin (the bot could print the layout it sensed).
+    pub redacted: bool,
     /// Reason, offending line, exit code, signal; null if the bot did nothing wrong.
-    #[schema(value_type = Object)]
-    pub error: Value,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>)]
+    pub error: Option<Value>,
     /// The last 64 KiB of the bot's stderr.
-    pub stderr_tail: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stderr_tail: Option<String>,
 }
 
 /// Queue a match of a bot's latest version on a maze (owner token or admin).
@@ -141,6 +160,7 @@ pub struct LogView {
         (status = 202, body = MatchQueued),
         (status = 400, body = ErrorBody), (status = 401, body = ErrorBody),
         (status = 403, body = ErrorBody), (status = 404, body = ErrorBody),
+        (status = 409, body = ErrorBody, description = "the bot is paused"),
         (status = 429, body = ErrorBody, description = "queue full; see Retry-After"),
     ))]
 async fn create_match(
@@ -154,6 +174,9 @@ async fn create_match(
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no bot {}", body.bot_id)))?;
     caller.require_owner(&state, bot.bot_id).await?;
+    if let Some(reason) = &bot.paused_reason {
+        return Err(paused_error(bot.bot_id, reason));
+    }
     let maze = find_maze(&state, body.maze_id).await?;
     if maze.hidden && !caller.is_admin() {
         return Err(hidden_error(maze.maze_id, &caller));
@@ -179,17 +202,24 @@ async fn create_match(
     ))
 }
 
-/// A match: status, score, steps, warnings, limits, seed, maze hash, engine version, timings.
+/// A match: status, score, steps, warnings, limits, seed, maze hash, engine version,
+/// timings (a hidden maze's match: no warnings, timings, maze hash or side, unless the
+/// caller is the admin).
 #[utoipa::path(get, path = "/api/matches/{id}", tag = "matches",
     params(("id" = i64, Path, description = "match id")),
     responses((status = 200, body = MatchView), (status = 404, body = ErrorBody)))]
 async fn get_match(
     State(state): State<AppState>,
+    caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<MatchView>> {
     let row = find_match(&state, id).await?;
     let record = parse_record(&row);
-    let field = |k: &str| record.get(k).cloned().unwrap_or(Value::Null);
+    let reveal = !row.maze_hidden || caller.is_admin();
+    let field = |k: &str| match record.get(k) {
+        Some(v) if reveal => v.clone(),
+        _ => Value::Null,
+    };
     Ok(axum::Json(MatchView {
         match_id: row.match_id,
         bot_id: row.bot_id,
@@ -206,15 +236,15 @@ async fn get_match(
         created_at: row.created_at,
         started_at: row.started_at,
         finished_at: row.finished_at,
-        warnings: record
-            .get("warnings")
-            .cloned()
-            .unwrap_or_else(|| Value::Array(vec![])),
-        limits: field("limits"),
-        maze_hash: record
-            .get("maze_hash")
-            .and_then(Value::as_str)
-            .map(String::from),
+        maze_hidden: row.maze_hidden,
+        warnings: match record.get("warnings") {
+            _ if !reveal => Value::Null,
+            Some(w) => w.clone(),
+            None => Value::Array(vec![]),
+        },
+        limits: record.get("limits").cloned().unwrap_or(Value::Null),
+        maze_hash: field("maze_hash").as_str().map(String::from),
+        maze_dim: field("maze_dim").as_i64(),
         engine_version: record
             .get("engine_version")
             .and_then(Value::as_str)
@@ -223,7 +253,7 @@ async fn get_match(
     }))
 }
 
-/// The per-step trace and the maze (hidden mazes: the bot's owner or the admin).
+/// The per-step trace and the maze (a hidden maze's match: the admin only).
 #[utoipa::path(get, path = "/api/matches/{id}/replay", tag = "matches",
     params(("id" = i64, Path, description = "match id")),
     responses(
@@ -237,8 +267,15 @@ async fn get_match_replay(
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<ReplayView>> {
     let row = find_match(&state, id).await?;
-    if row.maze_hidden && !caller.owns(&state, row.bot_id).await? {
-        return Err(hidden_error(row.maze_id, &caller));
+    if row.maze_hidden && !caller.is_admin() {
+        let msg = format!(
+            "match {id} was played on a hidden (ranking) maze: its replay would show the maze, \
+             so only the admin may see it; GET /api/matches/{id} has its status, score and steps"
+        );
+        return Err(match caller {
+            Caller::Anonymous => ApiError::Unauthorized(msg),
+            _ => ApiError::Forbidden(msg),
+        });
     }
     let trace = state.storage.get_trace(id).await?.ok_or_else(|| {
         ApiError::Conflict(format!(
@@ -257,7 +294,8 @@ async fn get_match_replay(
     }))
 }
 
-/// The bot's stderr tail and failure details (the bot's owner or the admin).
+/// The bot's stderr tail and failure details (the bot's owner or the admin; a hidden
+/// maze's match: the owner gets the status and the failure's step only).
 #[utoipa::path(get, path = "/api/matches/{id}/log", tag = "matches",
     params(("id" = i64, Path, description = "match id")),
     security(("bearer" = [])),
@@ -272,17 +310,31 @@ async fn get_match_log(
 ) -> ApiResult<axum::Json<LogView>> {
     let row = find_match(&state, id).await?;
     caller.require_owner(&state, row.bot_id).await?;
-    let record = parse_record(&row);
+    let mut record = parse_record(&row);
+    let error = record.remove("error").unwrap_or(Value::Null);
+    let redacted = row.maze_hidden && !caller.is_admin();
     Ok(axum::Json(LogView {
         match_id: id,
         status: row.status,
-        error: record.get("error").cloned().unwrap_or(Value::Null),
-        stderr_tail: record
-            .get("stderr_tail")
-            .and_then(Value::as_str)
-            .unwrap_or("")
-            .to_string(),
+        step: error.get("step").and_then(Value::as_u64),
+        redacted,
+        stderr_tail: (!redacted).then(|| {
+            record
+                .get("stderr_tail")
+                .and_then(Value::as_str)
+                .unwrap_or("")
+                .to_string()
+        }),
+        error: (!redacted).then_some(error),
     }))
+}
+
+/// The 409 for a paused bot's new matches.
+pub(super) fn paused_error(bot_id: i64, reason: &str) -> ApiError {
+    ApiError::Conflict(format!(
+        "bot {bot_id} is paused: {reason}; the admin can resume it (POST /api/bots/{bot_id}/resume), \
+         or upload a new version"
+    ))
 }
 
 async fn find_match(state: &AppState, id: i64) -> ApiResult<MatchRow> {

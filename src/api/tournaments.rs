@@ -67,8 +67,8 @@ pub struct TournamentView {
     responses(
         (status = 202, body = TournamentView),
         (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
-        (status = 404, body = ErrorBody), (status = 422, body = ErrorBody),
-        (status = 429, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody, description = "a bot is paused"),
+        (status = 422, body = ErrorBody), (status = 429, body = ErrorBody),
     ))]
 async fn create_tournament(
     State(state): State<AppState>,
@@ -103,6 +103,9 @@ async fn create_tournament(
             .get_bot(id)
             .await?
             .ok_or_else(|| ApiError::NotFound(format!("no bot {id}")))?;
+        if let Some(reason) = &bot.paused_reason {
+            return Err(super::matches::paused_error(id, reason));
+        }
         versions.push(bot.bot_version_id);
     }
     for &id in &body.maze_ids {
@@ -128,12 +131,14 @@ async fn create_tournament(
     ))
 }
 
-/// A tournament's progress (done/total) and standings.
+/// A tournament's progress (done/total) and standings (for non-admins without the
+/// score/optimum ratio when a hidden maze is counted).
 #[utoipa::path(get, path = "/api/tournaments/{id}", tag = "tournaments",
     params(("id" = i64, Path, description = "tournament id")),
     responses((status = 200, body = TournamentView), (status = 404, body = ErrorBody)))]
 async fn get_tournament(
     State(state): State<AppState>,
+    caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<TournamentView>> {
     let t = state
@@ -141,7 +146,10 @@ async fn get_tournament(
         .get_tournament(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-    let standings = state.storage.leaderboard(Scope::Tournament(id)).await?;
+    let standings = super::leaderboard::for_caller(
+        state.storage.leaderboard(Scope::Tournament(id)).await?,
+        &caller,
+    );
     Ok(axum::Json(TournamentView {
         tournament_id: t.tournament_id,
         name: t.name,

@@ -53,9 +53,11 @@ pub enum MazeCommand {
         /// The side: an even number, 12 to 16 for task mazes.
         #[arg(long)]
         dim: u32,
-        /// The seed.
+        /// The seed. Without it, a random seed from the operating system is used and
+        /// not shown, as a hidden (ranking) maze needs: whoever knows a seed can make
+        /// the maze again.
         #[arg(long)]
-        seed: u64,
+        seed: Option<u64>,
         /// The numeric file to write (stdout if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -154,6 +156,14 @@ pub fn run(cmd: MazeCommand) -> anyhow::Result<()> {
             write(&output, &render::svg(&maze, route.as_deref()))
         }
         MazeCommand::Generate { dim, seed, output } => {
+            let seed = match seed {
+                Some(s) => s,
+                None => {
+                    let mut b = [0u8; 8];
+                    getrandom::fill(&mut b).context("no randomness for a secret seed")?;
+                    u64::from_le_bytes(b)
+                }
+            };
             let maze = generator::generate(dim, seed)?;
             let text = numeric::write(&maze);
             match output {

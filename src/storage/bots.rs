@@ -1,8 +1,12 @@
-//! Bots and their versions.
+//! Bots and their versions, and pausing: a bot whose matches keep aborting (see
+//! [`super::matches::PAUSE_AFTER_ABORTS`]) is paused until an admin resumes it or a new
+//! version is uploaded.
 
 use sqlx::FromRow;
 
+use super::matches::failure_record;
 use super::{Result, Storage, StorageError, is_unique_violation, now_ms};
+use crate::runner::outcome::MatchStatus;
 
 /// A bot with its latest version.
 #[derive(Debug, Clone, PartialEq, FromRow)]
@@ -19,6 +23,17 @@ pub struct BotRow {
     pub bot_version_id: i64,
     /// The latest version's command.
     pub command: String,
+    /// Why the bot is paused; `None` while it is not.
+    pub paused_reason: Option<String>,
+    /// When it was paused (unix ms).
+    pub paused_at: Option<i64>,
+}
+
+impl BotRow {
+    /// Whether the bot is paused: its matches are not played.
+    pub fn is_paused(&self) -> bool {
+        self.paused_at.is_some()
+    }
 }
 
 /// One stored version of a bot.
@@ -56,7 +71,8 @@ pub struct NewVersion<'a> {
 }
 
 const BOT_WITH_LATEST: &str =
-    "select b.bot_id, b.name, b.created_at, v.version, v.bot_version_id, v.command
+    "select b.bot_id, b.name, b.created_at, v.version, v.bot_version_id, v.command,
+         b.paused_reason, b.paused_at
      from bot b join bot_version v on v.bot_id = b.bot_id
      where v.version = (select max(version) from bot_version where bot_id = b.bot_id)";
 
@@ -93,7 +109,8 @@ impl Storage {
         Ok(row)
     }
 
-    /// Adds a new version to a bot.
+    /// Adds a new version to a bot, and resumes the bot if it was paused (the new
+    /// version has no aborted matches).
     ///
     /// # Errors
     /// Database failures.
@@ -104,8 +121,35 @@ impl Storage {
     ) -> Result<BotVersionRow> {
         let mut tx = self.pool().begin().await?;
         let row = insert_version(&mut tx, bot_id, new).await?;
+        resume_in(&mut tx, bot_id).await?;
         tx.commit().await?;
         Ok(row)
+    }
+
+    /// Pauses a bot with `reason` and records its queued matches as `aborted` ("bot
+    /// paused: reason"), in one transaction. Returns false if it was paused already
+    /// (the first reason is kept) or does not exist.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn pause_bot(&self, bot_id: i64, reason: &str) -> Result<bool> {
+        let mut tx = self.pool().begin().await?;
+        let paused = pause_bot_in(&mut tx, bot_id, reason, now_ms()).await?;
+        tx.commit().await?;
+        Ok(paused)
+    }
+
+    /// Resumes a paused bot: its matches are accepted and played again, and the matches
+    /// aborted so far no longer count towards pausing it. Returns false if it was not
+    /// paused.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn resume_bot(&self, bot_id: i64) -> Result<bool> {
+        let mut tx = self.pool().begin().await?;
+        let resumed = resume_in(&mut tx, bot_id).await?;
+        tx.commit().await?;
+        Ok(resumed)
     }
 
     /// A bot and its latest version.
@@ -183,6 +227,53 @@ impl Storage {
                 .await?;
         Ok(found.is_some())
     }
+}
+
+/// See [`Storage::pause_bot`]; inside the caller's transaction.
+pub(super) async fn pause_bot_in(
+    tx: &mut sqlx::SqliteConnection,
+    bot_id: i64,
+    reason: &str,
+    now: i64,
+) -> Result<bool> {
+    let done = sqlx::query(
+        "update bot set paused_reason = ?, paused_at = ? where bot_id = ? and paused_at is null",
+    )
+    .bind(reason)
+    .bind(now)
+    .bind(bot_id)
+    .execute(&mut *tx)
+    .await?;
+    if done.rows_affected() == 0 {
+        return Ok(false);
+    }
+    sqlx::query(
+        "update match set status = 'aborted', record = ?, finished_at = ?
+         where status = 'queued'
+             and bot_version_id in (select bot_version_id from bot_version where bot_id = ?)",
+    )
+    .bind(failure_record(
+        MatchStatus::Aborted,
+        &format!("bot paused: {reason}"),
+    ))
+    .bind(now)
+    .bind(bot_id)
+    .execute(&mut *tx)
+    .await?;
+    Ok(true)
+}
+
+/// See [`Storage::resume_bot`]; inside the caller's transaction.
+async fn resume_in(tx: &mut sqlx::SqliteConnection, bot_id: i64) -> Result<bool> {
+    let done = sqlx::query(
+        "update bot set paused_reason = null, paused_at = null, resumed_at = ?
+         where bot_id = ? and paused_at is not null",
+    )
+    .bind(now_ms())
+    .bind(bot_id)
+    .execute(tx)
+    .await?;
+    Ok(done.rows_affected() == 1)
 }
 
 async fn insert_version(

@@ -1,5 +1,5 @@
-//! Standings: mean score (a did-not-finish counts as 1000), finish rate, mean ratio of
-//! score to the maze's optimum, matches played.
+//! Standings: mean score (a did-not-finish, `aborted` included, counts as 1000), finish
+//! rate, mean ratio of score to the maze's optimum, matches played.
 
 use sqlx::FromRow;
 
@@ -37,8 +37,13 @@ pub struct Standing {
     pub mean_score: f64,
     /// finished / played.
     pub finish_rate: f64,
-    /// Mean of score / optimum (over mazes with a known optimum).
+    /// Mean of score / optimum (over mazes with a known optimum). The API leaves it out
+    /// for non-admins when `hidden_played > 0`: over one hidden maze it gives the
+    /// maze's optimum away.
     pub mean_ratio: Option<f64>,
+    /// How many of the matches counted were on hidden mazes (not serialized).
+    #[serde(skip)]
+    pub hidden_played: i64,
 }
 
 impl Storage {
@@ -61,7 +66,8 @@ impl Storage {
                  sum(m.status = 'finished') as finished,
                  avg(case when m.status = 'finished' then m.score else {DNF_SCORE} end) as mean_score,
                  avg(case when m.status = 'finished' then 1.0 else 0.0 end) as finish_rate,
-                 avg((case when m.status = 'finished' then m.score else {DNF_SCORE} end) / z.optimum) as mean_ratio
+                 avg((case when m.status = 'finished' then m.score else {DNF_SCORE} end) / z.optimum) as mean_ratio,
+                 sum(z.hidden) as hidden_played
              from match m
              join bot_version v on v.bot_version_id = m.bot_version_id
              join bot b on b.bot_id = v.bot_id

@@ -1,10 +1,13 @@
 //! The match queue: matches are rows; workers claim them with a lease, and write the
 //! record in one transaction only while they still hold the lease.
+//! A match whose lease expired (its server died while it ran) is retried a bounded
+//! number of times ([`super::retries`]).
 
 use sqlx::FromRow;
 
 use super::{Result, Storage, now_ms};
 use crate::runner::MatchRecord;
+use crate::runner::outcome::{Failure, MatchStatus};
 
 /// Priority of single matches: they run before tournament matches.
 pub const PRIORITY_SINGLE: i64 = 0;
@@ -36,6 +39,8 @@ pub struct MatchRow {
     pub status: String,
     /// How many times a worker started it.
     pub attempts: i64,
+    /// How many times its lease expired while it ran (its server died).
+    pub lease_expiries: i64,
     /// Score when finished.
     pub score: Option<f64>,
     /// Run-0 steps.
@@ -72,7 +77,7 @@ pub struct ClaimedMatch {
 }
 
 const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, v.version, m.maze_id,
-        z.hidden as maze_hidden, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.score,
+        z.hidden as maze_hidden, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
         m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at
      from match m join bot_version v on v.bot_version_id = m.bot_version_id
      join maze z on z.maze_id = m.maze_id";
@@ -110,6 +115,7 @@ impl Storage {
 
     /// Claims the next queued match (single matches first, then by id) for `owner` until
     /// `now + lease_ms`, in one statement. With `tournament`, only that tournament's.
+    /// Matches of a paused bot are never claimed.
     ///
     /// # Errors
     /// Database failures.
@@ -124,9 +130,12 @@ impl Storage {
             "update match set status = 'running', lease_owner = ?, lease_expires_at = ?,
                  attempts = attempts + 1, started_at = ?
              where match_id = (
-                 select match_id from match
-                 where status = 'queued' and (? is null or tournament_id = ?)
-                 order by priority, match_id limit 1)
+                 select m.match_id from match m
+                 join bot_version v on v.bot_version_id = m.bot_version_id
+                 join bot b on b.bot_id = v.bot_id
+                 where m.status = 'queued' and b.paused_at is null
+                     and (? is null or m.tournament_id = ?)
+                 order by m.priority, m.match_id limit 1)
              returning match_id",
         )
         .bind(owner)
@@ -205,8 +214,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn fail_match(&self, match_id: i64, owner: &str, reason: &str) -> Result<bool> {
-        let record =
-            serde_json::json!({ "status": "crashed", "error": { "reason": reason } }).to_string();
+        let record = failure_record(MatchStatus::Crashed, reason);
         let done = sqlx::query(
             "update match set status = 'crashed', record = ?, finished_at = ?,
                  lease_owner = null, lease_expires_at = null
@@ -221,7 +229,9 @@ impl Storage {
         Ok(done.rows_affected() == 1)
     }
 
-    /// Puts a match `owner` holds back in the queue (a worker that stops before the end).
+    /// Puts a match `owner` holds back in the queue (a worker that stops before the end,
+    /// e.g. on a graceful shutdown). This is not counted against the match's retries:
+    /// the server chose to stop, the bot did nothing wrong.
     ///
     /// # Errors
     /// Database failures.
@@ -237,20 +247,15 @@ impl Storage {
         Ok(done.rows_affected() == 1)
     }
 
-    /// Puts every running match whose lease has expired back in the queue (their worker
-    /// died). Returns how many.
+    /// Deals with every running match whose lease has expired (its worker died) and
+    /// returns how many there were: re-queued, or aborted when their retries are used
+    /// up; see [`Storage::reap_expired`].
     ///
     /// # Errors
     /// Database failures.
     pub async fn requeue_expired(&self) -> Result<u64> {
-        let done = sqlx::query(
-            "update match set status = 'queued', lease_owner = null, lease_expires_at = null
-             where status = 'running' and lease_expires_at < ?",
-        )
-        .bind(now_ms())
-        .execute(self.pool())
-        .await?;
-        Ok(done.rows_affected())
+        let reaped = self.reap_expired().await?;
+        Ok((reaped.requeued.len() + reaped.aborted.len()) as u64)
     }
 
     /// A match by id.
@@ -306,40 +311,20 @@ impl Storage {
     }
 }
 
+/// The record (JSON) of a match the server ended without a record from the runner.
+pub(super) fn failure_record(status: MatchStatus, reason: &str) -> String {
+    serde_json::json!({
+        "status": status,
+        "error": Failure { reason: reason.to_string(), ..Failure::default() },
+    })
+    .to_string()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage::bots::NewVersion;
-    use crate::storage::mazes::NewMaze;
-    use crate::storage::test_support::fresh;
-
-    async fn setup(db: &Storage) -> (i64, i64) {
-        let v = db
-            .create_bot(
-                "b",
-                "h",
-                &NewVersion {
-                    command: "python3 b.py",
-                    dir: "/x",
-                    files_sha256: "s",
-                    file_count: 1,
-                },
-            )
-            .await
-            .unwrap();
-        let z = db
-            .insert_maze(&NewMaze {
-                name: "m",
-                hash: "hash",
-                dim: 2,
-                layout: "2\n3,6\n9,12\n",
-                hidden: false,
-                optimum: Some(1),
-            })
-            .await
-            .unwrap();
-        (v.bot_version_id, z.maze_id)
-    }
+    use crate::storage::leaderboard::Scope;
+    use crate::storage::test_support::{bot_and_maze, fresh};
 
     fn record(status: crate::runner::MatchStatus) -> MatchRecord {
         serde_json::from_value(serde_json::json!({
@@ -354,7 +339,7 @@ mod tests {
     #[tokio::test]
     async fn single_matches_are_claimed_before_tournament_matches() {
         let (db, _dir) = fresh().await;
-        let (v, z) = setup(&db).await;
+        let (v, z) = bot_and_maze(&db).await;
         let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
         assert_eq!((t.total, t.done), (2, 0));
         let single = db.queue_match(v, z, 9).await.unwrap();
@@ -375,7 +360,7 @@ mod tests {
     #[tokio::test]
     async fn a_record_is_written_once_and_only_by_the_lease_holder() {
         let (db, _dir) = fresh().await;
-        let (v, z) = setup(&db).await;
+        let (v, z) = bot_and_maze(&db).await;
         let id = db.queue_match(v, z, 1).await.unwrap();
         db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
         let finished = crate::runner::MatchStatus::Finished;
@@ -404,7 +389,7 @@ mod tests {
     #[tokio::test]
     async fn expired_leases_go_back_to_the_queue() {
         let (db, _dir) = fresh().await;
-        let (v, z) = setup(&db).await;
+        let (v, z) = bot_and_maze(&db).await;
         let id = db.queue_match(v, z, 1).await.unwrap();
         db.claim_next("dead", -1, None).await.unwrap().unwrap();
         assert!(!db.renew_lease(id, "other", 1000).await.unwrap());
@@ -427,7 +412,7 @@ mod tests {
     #[tokio::test]
     async fn the_leaderboard_counts_a_dnf_as_1000() {
         let (db, _dir) = fresh().await;
-        let (v, z) = setup(&db).await;
+        let (v, z) = bot_and_maze(&db).await;
         let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
         let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
         db.complete_match(
@@ -445,7 +430,6 @@ mod tests {
         )
         .await
         .unwrap();
-        use crate::storage::leaderboard::Scope;
         let board = db
             .leaderboard(Scope::Tournament(t.tournament_id))
             .await

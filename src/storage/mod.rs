@@ -9,6 +9,7 @@ pub mod bots;
 pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
+pub mod retries;
 pub mod tournaments;
 
 use std::str::FromStr;
@@ -119,5 +120,35 @@ pub(crate) mod test_support {
         let dir = tempfile::tempdir().unwrap();
         let url = format!("sqlite://{}", dir.path().join("test.db").display());
         (Storage::open(&url).await.unwrap(), dir)
+    }
+
+    /// A bot "b" (owner token hash "h") with one version, and a public 2x2 maze "m":
+    /// the version's and the maze's ids.
+    pub async fn bot_and_maze(db: &Storage) -> (i64, i64) {
+        let v = db
+            .create_bot(
+                "b",
+                "h",
+                &crate::storage::bots::NewVersion {
+                    command: "python3 b.py",
+                    dir: "/x",
+                    files_sha256: "s",
+                    file_count: 1,
+                },
+            )
+            .await
+            .unwrap();
+        let z = db
+            .insert_maze(&crate::storage::mazes::NewMaze {
+                name: "m",
+                hash: "hash",
+                dim: 2,
+                layout: "2\n3,6\n9,12\n",
+                hidden: false,
+                optimum: Some(1),
+            })
+            .await
+            .unwrap();
+        (v.bot_version_id, z.maze_id)
     }
 }

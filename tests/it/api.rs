@@ -17,6 +17,10 @@ const FINAL: &[&str] = &[
     "timeout",
     "crashed",
     "protocol_error",
+    "memory_limit",
+    "process_limit",
+    "scratch_limit",
+    "aborted",
 ];
 
 async fn register(server: &TestServer, name: &str, command: &str, files: Value) -> (i64, String) {
@@ -218,7 +222,7 @@ async fn a_tournament_records_every_match_and_ranks_by_mean_score() {
     let mut expected: Vec<(f64, i64)> = sums.iter().map(|(bot, (s, n))| (s / n, *bot)).collect();
     expected.sort_by(|x, y| x.0.partial_cmp(&y.0).unwrap());
     let (s, board) = server
-        .get(&format!("/api/leaderboard?tournament={id}"), None)
+        .get(&format!("/api/leaderboard?tournament={id}"), Some(ADMIN))
         .await;
     assert_eq!(s, 200);
     let board = board.as_array().unwrap();
@@ -230,6 +234,12 @@ async fn a_tournament_records_every_match_and_ranks_by_mean_score() {
         assert_eq!(board[i]["played"], 6);
         assert!(board[i]["mean_ratio"].as_f64().unwrap() > 1.0);
     }
+    // The mazes are hidden: for anyone else the ratio to their optimum is left out.
+    let (_, public) = server
+        .get(&format!("/api/leaderboard?tournament={id}"), None)
+        .await;
+    assert!(public[0]["mean_ratio"].is_null(), "{public}");
+    assert_eq!(public[0]["mean_score"], board[0]["mean_score"]);
     assert_eq!(done["standings"].as_array().unwrap().len(), 2);
     // Hidden mazes are the ranking set: the default board counts these matches too.
     let (_, ranking) = server.get("/api/leaderboard", None).await;
@@ -341,7 +351,7 @@ async fn owner_and_admin_endpoints_refuse_others() {
         )
         .await;
     assert_error(s, &v, 403);
-    // The admin may run it; its replay is the owner's and the admin's only.
+    // The admin may run it; its replay is the admin's only.
     let (s, q) = server
         .post(
             "/api/matches",
@@ -353,9 +363,13 @@ async fn owner_and_admin_endpoints_refuse_others() {
     let id = wait_match(&server, q["match_id"].as_i64().unwrap()).await["match_id"]
         .as_i64()
         .unwrap();
+    let (s, v) = server
+        .get(&format!("/api/matches/{id}/replay"), Some(&token))
+        .await;
+    assert_error(s, &v, 403);
     assert_eq!(
         server
-            .get(&format!("/api/matches/{id}/replay"), Some(&token))
+            .get(&format!("/api/matches/{id}/replay"), Some(ADMIN))
             .await
             .0,
         200
@@ -700,6 +714,7 @@ async fn the_openapi_document_lists_every_route() {
         ("/api/bots", vec!["get", "post"]),
         ("/api/bots/{id}", vec!["get"]),
         ("/api/bots/{id}/versions", vec!["post"]),
+        ("/api/bots/{id}/resume", vec!["post"]),
         ("/api/mazes", vec!["get", "post"]),
         ("/api/mazes/{id}", vec!["get"]),
         ("/api/mazes/{id}/svg", vec!["get"]),
@@ -850,6 +865,356 @@ async fn sigterm_stops_the_server_without_losing_a_match() {
     assert_eq!(
         row.status, "queued",
         "the interrupted match is back in the queue"
+    );
+}
+
+/// An admin-generated hidden 12x12 maze; its id.
+async fn generate_hidden(server: &TestServer, name: &str) -> i64 {
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": name, "hidden": true, "generate": {"dim": 12}}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    assert!(
+        v.get("seed").is_none(),
+        "a hidden maze's seed is shown: {v}"
+    );
+    v["maze_id"].as_i64().unwrap()
+}
+
+/// Asserts that a non-admin's view of hidden maze `id` names no hash, side or optimum.
+fn assert_maze_redacted(v: &Value, id: i64) {
+    assert_eq!(v["maze_id"], id, "{v}");
+    assert_eq!(v["hidden"], true, "{v}");
+    for key in ["hash", "dim", "optimum"] {
+        assert!(v[key].is_null(), "{key} of hidden maze {id} shown: {v}");
+    }
+    assert!(v.get("layout").is_none(), "{v}");
+}
+
+#[tokio::test]
+async fn non_admins_see_no_hash_dim_or_optimum_of_a_hidden_maze() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (bot, token) = register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let hidden = generate_hidden(&server, "ranking-1").await;
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "cup", "bot_ids": [bot], "maze_ids": [hidden]}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    let tid = t["tournament_id"].as_i64().unwrap();
+    wait_tournament(&server, tid, Duration::from_secs(60)).await;
+    let storage = mazearena::storage::Storage::open(&server.database)
+        .await
+        .unwrap();
+    let mid = storage.tournament_matches(tid).await.unwrap()[0].match_id;
+    // The admin sees everything.
+    let (_, maze) = server
+        .get(&format!("/api/mazes/{hidden}"), Some(ADMIN))
+        .await;
+    let hash = maze["hash"].as_str().unwrap().to_string();
+    assert_eq!(maze["dim"], 12);
+    assert!(maze["optimum"].is_u64(), "{maze}");
+    let (_, m) = server
+        .get(&format!("/api/matches/{mid}"), Some(ADMIN))
+        .await;
+    assert_eq!(
+        (m["maze_hash"].as_str(), &m["maze_dim"]),
+        (Some(&*hash), &json!(12))
+    );
+    assert!(m["timings"]["wall_ms"].is_u64(), "{m}");
+    let boards = [
+        "/api/leaderboard".to_string(),
+        "/api/leaderboard?scope=all".to_string(),
+        format!("/api/leaderboard?tournament={tid}"),
+    ];
+    for path in &boards {
+        let (_, b) = server.get(path, Some(ADMIN)).await;
+        assert!(b[0]["mean_ratio"].is_f64(), "{path}: {b}");
+    }
+    // Anonymous callers and a bot's owner see no hash, side or optimum, anywhere.
+    for caller in [None, Some(token.as_str())] {
+        let mut bodies = Vec::new();
+        let (_, list) = server.get("/api/mazes", caller).await;
+        let listed = list.as_array().unwrap();
+        assert_maze_redacted(
+            listed.iter().find(|m| m["maze_id"] == hidden).unwrap(),
+            hidden,
+        );
+        assert!(
+            listed
+                .iter()
+                .any(|m| m["hidden"] == false && m["hash"].is_string())
+        );
+        let (_, one) = server.get(&format!("/api/mazes/{hidden}"), caller).await;
+        assert_maze_redacted(&one, hidden);
+        let (s, m) = server.get(&format!("/api/matches/{mid}"), caller).await;
+        assert_eq!(s, 200, "{m}");
+        for key in ["maze_hash", "maze_dim", "warnings", "timings"] {
+            assert!(m[key].is_null(), "{key} shown: {m}");
+        }
+        assert_eq!(
+            (&m["status"], m["maze_hidden"].as_bool()),
+            (&json!("finished"), Some(true))
+        );
+        assert!(m["score"].is_f64() && m["run1_steps"].is_u64() && m["total_steps"].is_u64());
+        let (_, tv) = server.get(&format!("/api/tournaments/{tid}"), caller).await;
+        assert_eq!(tv["standings"][0]["played"], 1, "{tv}");
+        assert!(tv["standings"][0]["mean_ratio"].is_null(), "{tv}");
+        for path in &boards {
+            let (_, b) = server.get(path, caller).await;
+            assert!(b[0]["mean_score"].is_f64(), "{path}: {b}");
+            assert!(b[0]["mean_ratio"].is_null(), "{path}: {b}");
+            bodies.push(b);
+        }
+        let (s, svg) = server
+            .get(&format!("/api/mazes/{hidden}/svg"), caller)
+            .await;
+        assert!(s == 401 || s == 403, "{s} {svg}");
+        bodies.extend([
+            list,
+            one,
+            m,
+            tv,
+            server.get(&format!("/api/bots/{bot}"), caller).await.1,
+        ]);
+        for b in bodies {
+            assert!(!b.to_string().contains(&hash), "the hash leaks: {b}");
+        }
+    }
+}
+
+#[tokio::test]
+async fn an_owner_gets_no_replay_or_stderr_of_a_hidden_maze_match() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    // A bot that prints what it senses to stderr, then quits at its third step.
+    let leaky = "import sys\nn = 0\nfor line in sys.stdin:\n    if '\"sense\"' in line:\n        \
+                 n += 1\n        sys.stderr.write('LEAK ' + line)\n        sys.stderr.flush()\n        \
+                 if n == 3:\n            sys.exit(0)\n        print('{\"rotation\":0,\"movement\":1}', flush=True)\n";
+    let (bot, token) = register(&server, "leaky", "python3 bot.py", json!({"bot.py": leaky})).await;
+    let hidden = generate_hidden(&server, "ranking-1").await;
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": hidden, "seed": 5}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let id = q["match_id"].as_i64().unwrap();
+    let done = wait_match(&server, id).await;
+    assert_eq!(done["status"], "crashed", "{done}");
+    // The owner: status and steps; the log's status and step only; no replay.
+    let (_, m) = server
+        .get(&format!("/api/matches/{id}"), Some(&token))
+        .await;
+    assert_eq!(
+        (&m["status"], &m["total_steps"]),
+        (&json!("crashed"), &done["total_steps"])
+    );
+    assert!(m["total_steps"].is_u64() && m["score"].is_null(), "{m}");
+    let (s, log) = server
+        .get(&format!("/api/matches/{id}/log"), Some(&token))
+        .await;
+    assert_eq!(s, 200, "{log}");
+    assert_eq!(
+        (&log["status"], &log["redacted"]),
+        (&json!("crashed"), &json!(true))
+    );
+    assert!(log["step"].is_null() || log["step"].is_u64(), "{log}");
+    assert!(
+        log.get("error").is_none() && log.get("stderr_tail").is_none(),
+        "{log}"
+    );
+    assert!(!log.to_string().contains("LEAK"));
+    let (s, v) = server
+        .get(&format!("/api/matches/{id}/replay"), Some(&token))
+        .await;
+    assert_error(s, &v, 403);
+    assert!(
+        v["error"]["message"].as_str().unwrap().contains("hidden"),
+        "{v}"
+    );
+    // Anonymous callers: the match view, nothing else.
+    let (s, v) = server.get(&format!("/api/matches/{id}/replay"), None).await;
+    assert_error(s, &v, 401);
+    let (s, v) = server.get(&format!("/api/matches/{id}/log"), None).await;
+    assert_error(s, &v, 401);
+    // The admin sees the stderr, the failure and the replay.
+    let (_, log) = server
+        .get(&format!("/api/matches/{id}/log"), Some(ADMIN))
+        .await;
+    assert_eq!(log["redacted"], false);
+    assert!(
+        log["stderr_tail"].as_str().unwrap().contains("LEAK"),
+        "{log}"
+    );
+    assert!(
+        !log["error"]["reason"].as_str().unwrap().is_empty(),
+        "{log}"
+    );
+    let (s, replay) = server
+        .get(&format!("/api/matches/{id}/replay"), Some(ADMIN))
+        .await;
+    assert_eq!(s, 200, "{replay}");
+    assert!(replay["maze_layout"].is_string() && replay["trace"].is_array());
+}
+
+#[tokio::test]
+async fn hidden_generated_mazes_get_secret_random_seeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let a = generate_hidden(&server, "h1").await;
+    let b = generate_hidden(&server, "h2").await;
+    let (_, ma) = server.get(&format!("/api/mazes/{a}"), Some(ADMIN)).await;
+    let (_, mb) = server.get(&format!("/api/mazes/{b}"), Some(ADMIN)).await;
+    assert_ne!(ma["hash"], mb["hash"]);
+    assert_ne!(ma["layout"], mb["layout"]);
+    for v in [&ma, &mb] {
+        assert!(v.get("seed").is_none(), "{v}");
+    }
+    let (_, list) = server.get("/api/mazes", Some(ADMIN)).await;
+    assert!(
+        list.as_array()
+            .unwrap()
+            .iter()
+            .all(|m| m.get("seed").is_none()),
+        "{list}"
+    );
+    // A hidden maze cannot be given a seed; a public one can, and shows it.
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "h3", "hidden": true, "generate": {"dim": 12, "seed": 7}}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_error(s, &v, 422);
+    let (s, v) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "p", "generate": {"dim": 12, "seed": 4242}}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    assert_eq!(v["seed"], 4242);
+    let expected = mazearena::engine::generator::generate(12, 4242).unwrap();
+    assert_eq!(v["hash"].as_str().unwrap(), expected.hash());
+    // Not both a layout and a generator; the generator's sides only; admin only.
+    let both = json!({"name": "x", "layout": "2\n3,6\n9,12\n", "generate": {"dim": 12}});
+    let (s, v) = server.post("/api/mazes", both, Some(ADMIN)).await;
+    assert_error(s, &v, 422);
+    let odd = json!({"name": "x", "generate": {"dim": 13}});
+    let (s, v) = server.post("/api/mazes", odd.clone(), Some(ADMIN)).await;
+    assert_error(s, &v, 422);
+    let (s, v) = server.post("/api/mazes", odd, None).await;
+    assert_error(s, &v, 401);
+}
+
+#[tokio::test]
+async fn a_match_running_each_time_the_server_dies_is_aborted_and_its_bot_paused() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["--jobs", "2", "--lease-secs", "1"];
+    let mut server = TestServer::start(dir.path(), &args);
+    let code = std::fs::read_to_string(root().join("tests/fixtures/bots/scripted.py")).unwrap();
+    // Slow: 1000 idle answers at 50 ms each; both matches run at once.
+    let command = "python3 scripted.py --delay-ms 50";
+    let (bot, token) = register(&server, "pill", command, json!({"scripted.py": code})).await;
+    let mut ids = Vec::new();
+    for seed in [1, 2] {
+        let body = json!({"bot_id": bot, "maze_id": 1, "seed": seed});
+        let (s, q) = server.post("/api/matches", body, Some(&token)).await;
+        assert_eq!(s, 202, "{q}");
+        ids.push(q["match_id"].as_i64().unwrap());
+    }
+    // Kill the server while both run, three times.
+    for attempt in 1..=3 {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        for &id in &ids {
+            loop {
+                let (_, v) = server.get(&format!("/api/matches/{id}"), None).await;
+                if v["status"] == "running" && v["attempts"] == attempt {
+                    break;
+                }
+                assert!(Instant::now() < deadline, "attempt {attempt}: {v}");
+                tokio::time::sleep(Duration::from_millis(50)).await;
+            }
+        }
+        server.kill();
+        server = TestServer::start(dir.path(), &args);
+    }
+    // Their leases expire once more: the third expiry aborts them; the bot is paused.
+    for &id in &ids {
+        let v = wait_match(&server, id).await;
+        assert_eq!(
+            (&v["status"], &v["attempts"]),
+            (&json!("aborted"), &json!(3)),
+            "{v}"
+        );
+        let (_, log) = server
+            .get(&format!("/api/matches/{id}/log"), Some(&token))
+            .await;
+        assert_eq!(
+            log["error"]["reason"],
+            "the match was running each time the server stopped (3 attempts); it is not retried"
+        );
+    }
+    let (_, b) = server.get(&format!("/api/bots/{bot}"), None).await;
+    assert_eq!(b["paused"], true, "{b}");
+    assert!(
+        b["paused_reason"].as_str().unwrap().contains("aborted"),
+        "{b}"
+    );
+    let again = json!({"bot_id": bot, "maze_id": 1});
+    let (s, v) = server
+        .post("/api/matches", again.clone(), Some(&token))
+        .await;
+    assert_error(s, &v, 409);
+    assert!(
+        v["error"]["message"].as_str().unwrap().contains("paused"),
+        "{v}"
+    );
+    // Only the admin resumes it.
+    let resume = format!("/api/bots/{bot}/resume");
+    let (s, v) = server.post(&resume, json!({}), Some(&token)).await;
+    assert_error(s, &v, 403);
+    let (s, v) = server.post(&resume, json!({}), Some(ADMIN)).await;
+    assert_eq!(
+        (s, &v["paused"], &v["paused_reason"]),
+        (200, &json!(false), &Value::Null),
+        "{v}"
+    );
+    assert_eq!(
+        server.post("/api/matches", again, Some(&token)).await.0,
+        202
+    );
+    let metrics = server
+        .client()
+        .get(format!("{}/metrics", server.base))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    assert!(
+        metrics.contains("mazearena_matches{status=\"aborted\"} 2"),
+        "{metrics}"
     );
 }
 
