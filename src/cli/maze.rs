@@ -160,7 +160,8 @@ pub fn run(cmd: MazeCommand) -> anyhow::Result<()> {
                 Some(s) => s,
                 None => {
                     let mut b = [0u8; 8];
-                    getrandom::fill(&mut b).context("no randomness for a secret seed")?;
+                    getrandom::fill(&mut b)
+                        .map_err(|e| anyhow::anyhow!("no randomness for a secret seed: {e}"))?;
                     u64::from_le_bytes(b)
                 }
             };
