@@ -132,7 +132,7 @@ pub async fn run_match(
     let mut session = match Session::start(&launch, limits) {
         Ok(s) => s,
         Err(failure) => {
-            record.error = Some(failure);
+            record.error = Some(*failure);
             record.timings.wall_ms = started.elapsed().as_millis() as u64;
             return record;
         }

@@ -144,7 +144,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 }),
                 fsize: Some(launch.scratch_bytes),
                 address_space: None,
-                command: words.iter().map(Into::into).collect(),
+                command: words.iter().map(|w| in_sandbox(w, launch.dir)).collect(),
             };
             let mut cmd = Command::new(&full.bwrap);
             cmd.args(args)
@@ -197,6 +197,23 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
         memory_limit: launch.memory_limit_bytes,
         process_limit: launch.process_limit,
     })
+}
+
+/// A command word that is an absolute path into the bot's folder, as it is seen in the
+/// sandbox (the folder is the working directory there); other words unchanged.
+fn in_sandbox(word: &str, dir: &Path) -> std::ffi::OsString {
+    let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    let path = Path::new(word);
+    match path
+        .is_absolute()
+        .then(|| path.strip_prefix(&dir).ok())
+        .flatten()
+    {
+        Some(rel) => Path::new(super::sandbox::WORKDIR)
+            .join(rel)
+            .into_os_string(),
+        None => word.into(),
+    }
 }
 
 fn direct(launch: &Launch<'_>, words: &[String]) -> Command {

@@ -65,11 +65,13 @@ impl Session {
     ///
     /// # Errors
     /// The failure to record when it cannot be started or refuses the start message.
-    pub fn start(launch: &process::Launch<'_>, limits: Limits) -> Result<Session, Failure> {
+    pub fn start(launch: &process::Launch<'_>, limits: Limits) -> Result<Session, Box<Failure>> {
         let started = Instant::now();
-        let mut process = process::spawn(launch).map_err(|e| Failure {
-            reason: e.to_string(),
-            ..Failure::default()
+        let mut process = process::spawn(launch).map_err(|e| {
+            Box::new(Failure {
+                reason: e.to_string(),
+                ..Failure::default()
+            })
         })?;
         // The pipes were requested in `spawn`; their absence would be a bug there.
         let stdin = process

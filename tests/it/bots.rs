@@ -123,15 +123,14 @@ fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
     let kit = root().join("bots/rust");
     build(&kit, &["cargo", "build", "--release", "--quiet"]);
     let dir = tempfile::tempdir().unwrap();
-    let manifest = dir.path().join("bot.toml");
-    std::fs::write(
-        &manifest,
-        format!(
-            "name = \"champion\"\ncommand = \"{}\"\n",
-            kit.join("target/release/champion").display()
-        ),
+    // A bot sees only its own folder: the manifest's folder gets the binary.
+    std::fs::copy(
+        kit.join("target/release/champion"),
+        dir.path().join("champion"),
     )
     .unwrap();
+    let manifest = dir.path().join("bot.toml");
+    std::fs::write(&manifest, "name = \"champion\"\ncommand = \"./champion\"\n").unwrap();
     let db = format!("sqlite://{}", dir.path().join("c.db").display());
     let contest = shared_maze("micromouseonline/classic");
     let v = mazearena_json(&[

@@ -471,25 +471,30 @@ async fn a_local_tournament_writes_every_match_and_prints_standings() {
     // Two manifests: the simple Python bot, and the adapter with the fixture robot.
     let simple_dir = dir.path().join("simple");
     std::fs::create_dir(&simple_dir).unwrap();
+    // A bot sees only its own folder: each gets a copy of its files.
+    for f in ["simple_bot.py", "mazebot.py"] {
+        std::fs::copy(root().join("bots/python").join(f), simple_dir.join(f)).unwrap();
+    }
     std::fs::write(
         simple_dir.join("bot.toml"),
-        format!(
-            "name = \"simple-python\"\ncommand = \"python3 {}\"\n",
-            root().join("bots/python/simple_bot.py").display()
-        ),
+        "name = \"simple-python\"\ncommand = \"python3 simple_bot.py\"\n",
     )
     .unwrap();
     let adapter_dir = dir.path().join("adapter");
     std::fs::create_dir(&adapter_dir).unwrap();
-    let robot = root().join("tests/fixtures/robot_py/robot.py");
-    let adapter = root().join("bots/python/udacity_adapter.py");
+    std::fs::copy(
+        root().join("tests/fixtures/robot_py/robot.py"),
+        adapter_dir.join("robot.py"),
+    )
+    .unwrap();
+    std::fs::copy(
+        root().join("bots/python/udacity_adapter.py"),
+        adapter_dir.join("udacity_adapter.py"),
+    )
+    .unwrap();
     std::fs::write(
         adapter_dir.join("bot.toml"),
-        format!(
-            "name = \"robot-py\"\nlanguage = \"python\"\ncommand = \"python3 {} {}\"\n",
-            adapter.display(),
-            robot.display()
-        ),
+        "name = \"robot-py\"\nlanguage = \"python\"\ncommand = \"python3 udacity_adapter.py robot.py\"\n",
     )
     .unwrap();
     let db = format!("sqlite://{}", dir.path().join("t.db").display());

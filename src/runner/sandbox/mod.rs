@@ -27,6 +27,9 @@ pub use uid::UidLease;
 /// Where the `mazearena` binary is mounted inside the sandbox.
 pub const HELPER_IN_SANDBOX: &str = "/run/mazearena/mazearena";
 
+/// The bot's working directory inside the sandbox, where its files are mounted.
+pub const WORKDIR: &str = "/sandbox/work";
+
 /// The subcommand of the helper that runs [`jail::exec`].
 pub const JAIL_SUBCOMMAND: &str = "sandbox-exec";
 

@@ -91,10 +91,8 @@ pub fn runtime_roots(hide: &[PathBuf]) -> Vec<PathBuf> {
                 dir.clone()
             };
             // rustup's proxies in ~/.cargo/bin need the toolchains in ~/.rustup.
-            if let Some(home) = &home {
-                if root == home.join(".cargo") {
-                    add(home.join(".rustup"));
-                }
+            if let Some(home) = home.as_ref().filter(|h| root == h.join(".cargo")) {
+                add(home.join(".rustup"));
             }
             add(root);
         }
