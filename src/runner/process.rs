@@ -144,7 +144,9 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 }),
                 fsize: Some(launch.scratch_bytes),
                 address_space: None,
-                command: words.iter().map(|w| in_sandbox(w, launch.dir)).collect(),
+                command: std::iter::once(in_sandbox(&words[0], launch.dir))
+                    .chain(words[1..].iter().map(Into::into))
+                    .collect(),
             };
             let mut cmd = Command::new(&full.bwrap);
             cmd.args(args)
@@ -199,8 +201,9 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
     })
 }
 
-/// A command word that is an absolute path into the bot's folder, as it is seen in the
-/// sandbox (the folder is the working directory there); other words unchanged.
+/// The bot's program, when given as an absolute path into its folder, as it is seen in
+/// the sandbox (the folder is the working directory there); any other program unchanged.
+/// Arguments are never rewritten.
 fn in_sandbox(word: &str, dir: &Path) -> std::ffi::OsString {
     let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
     let path = Path::new(word);
