@@ -238,7 +238,10 @@ impl BotProcess {
     pub fn cpu_us(&self) -> Option<u64> {
         match (&self.cgroup, self.pid) {
             (Some(cg), _) => cg.cpu_us(),
-            (None, Some(pid)) => Some(proctree::usage(pid).cpu_us),
+            // The sandbox without a cgroup: the whole tree (PID namespace: nothing escapes).
+            (None, Some(pid)) if self.sandboxed => Some(proctree::usage(pid).cpu_us),
+            // No sandbox: the bot process and its waited-for children (one read a step).
+            (None, Some(pid)) => Some(proctree::process_cpu_us(pid)),
             (None, None) => None,
         }
     }

@@ -82,6 +82,14 @@ pub fn usage(root: u32) -> TreeUsage {
     total
 }
 
+/// CPU time of one process (user + system, with its waited-for children), in µs; 0
+/// when it is gone.
+pub fn process_cpu_us(pid: u32) -> u64 {
+    stat_fields(pid)
+        .and_then(|f| f.get(10..14).map(|t| t.iter().sum::<u64>()))
+        .map_or(0, |ticks| ticks * 1_000_000 / clock_ticks())
+}
+
 /// Sends SIGKILL to every process of the tree, leaves first, until none is left (at
 /// most 50 rounds: a process may fork while the tree is walked).
 pub fn kill_tree(root: u32) {
