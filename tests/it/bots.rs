@@ -112,6 +112,36 @@ fn every_manifest_finishes_the_classic_mazes_in_a_tournament() {
     for m in matches {
         assert_eq!(m["status"], "finished", "{m}");
     }
+    // The same steps and scores without the sandbox (the tests' default is the full one).
+    if crate::support::sandbox().level() == "full" {
+        let db2 = format!("sqlite://{}", dir.path().join("bare.db").display());
+        let mut bare = args.clone();
+        let at = bare.iter().position(|a| *a == db.as_str()).unwrap();
+        bare[at] = &db2;
+        bare.extend(["--sandbox", "none"]);
+        let outside = mazearena_json(&bare);
+        let key = |m: &Value| {
+            let f = |k: &str| m[k].to_string();
+            (
+                f("bot"),
+                f("maze"),
+                f("status"),
+                f("run0_steps"),
+                f("run1_steps"),
+                f("score"),
+            )
+        };
+        let mut inside: Vec<_> = matches.iter().map(key).collect();
+        let mut bare: Vec<_> = outside["matches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(key)
+            .collect();
+        inside.sort();
+        bare.sort();
+        assert_eq!(inside, bare, "a bot played differently inside the sandbox");
+    }
 }
 
 #[test]

@@ -85,6 +85,11 @@ fn the_adapter_runs_an_unchanged_robot_py_that_prints_on_every_step() {
         assert_finished(&v);
         // The robot's prints went to stderr, not into the protocol.
         assert!(v["stderr_tail"].as_str().unwrap().contains("robot:"));
+        same_without_the_sandbox(
+            &v,
+            &classic_path(n),
+            "python3 bots/python/udacity_adapter.py tests/fixtures/robot_py/robot.py",
+        );
     }
 }
 
@@ -96,7 +101,33 @@ fn the_adapter_runs_under_python_2_7() {
     };
     for n in 1..=3 {
         let bot = format!("{py2} bots/python/udacity_adapter.py tests/fixtures/robot_py/robot.py");
-        assert_finished(&run_json(&classic_path(n), &bot));
+        let inside = run_json(&classic_path(n), &bot);
+        assert_finished(&inside);
+        same_without_the_sandbox(&inside, &classic_path(n), &bot);
+    }
+}
+
+/// Plays `bot` again with `--sandbox none` and checks the same steps and score.
+fn same_without_the_sandbox(inside: &Value, maze: &str, bot: &str) {
+    if inside["limits"]["sandbox"] != "full" {
+        return;
+    }
+    let out = mazearena(&[
+        "run",
+        "--maze",
+        maze,
+        "--bot",
+        bot,
+        "--json",
+        "--sandbox",
+        "none",
+    ]);
+    let outside: Value = serde_json::from_slice(&out.stdout).unwrap();
+    for k in ["status", "score", "run0_steps", "run1_steps", "total_steps"] {
+        assert_eq!(
+            inside[k], outside[k],
+            "{k} differs inside the sandbox for {bot}"
+        );
     }
 }
 
