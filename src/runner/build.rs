@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use super::sandbox::{JAIL_SUBCOMMAND, Sandbox, jail};
+use super::sandbox::{Sandbox, jail};
 
 /// The longest a build may take.
 pub const BUILD_TIMEOUT: Duration = Duration::from_secs(600);
@@ -68,12 +68,7 @@ pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), B
                 command: words.iter().map(Into::into).collect(),
                 ..jail::JailArgs::default()
             };
-            let mut cmd = tokio::process::Command::new(&full.bwrap);
-            cmd.args(args)
-                .arg(JAIL_SUBCOMMAND)
-                .args(jail.to_args())
-                .env_clear();
-            cmd
+            tokio::process::Command::from(full.command(args, &jail))
         }
     };
     cmd.stdin(std::process::Stdio::null())

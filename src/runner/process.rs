@@ -13,7 +13,7 @@ use nix::unistd::Pid;
 use tokio::process::{Child, Command};
 
 use super::sandbox::cgroup::{self, CgroupHit, CgroupLimits, MatchCgroup};
-use super::sandbox::{JAIL_SUBCOMMAND, Sandbox, UidLease, jail, proctree};
+use super::sandbox::{Sandbox, UidLease, jail, proctree};
 
 /// Environment variables passed through to bots run without the sandbox; everything
 /// else is cleared so a bot sees the same environment under the CLI and the server.
@@ -100,6 +100,9 @@ pub struct BotProcess {
     sandboxed: bool,
     memory_limit: Option<u64>,
     process_limit: Option<u64>,
+    /// The scratch area as seen from here, through bubblewrap's init inside the
+    /// sandbox (which lives as long as the match); found once.
+    scratch: std::sync::OnceLock<PathBuf>,
 }
 
 /// Starts the bot with piped stdin, stdout and stderr.
@@ -148,12 +151,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                     .chain(words[1..].iter().map(Into::into))
                     .collect(),
             };
-            let mut cmd = Command::new(&full.bwrap);
-            cmd.args(args)
-                .arg(JAIL_SUBCOMMAND)
-                .args(jail.to_args())
-                .env_clear();
-            (cmd, cgroup, uid)
+            (Command::from(full.command(args, &jail)), cgroup, uid)
         }
     };
     cmd.stdin(Stdio::piped())
@@ -198,6 +196,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
         sandboxed: matches!(launch.sandbox, Sandbox::Full(_)),
         memory_limit: launch.memory_limit_bytes,
         process_limit: launch.process_limit,
+        scratch: std::sync::OnceLock::new(),
     })
 }
 
@@ -278,16 +277,19 @@ impl BotProcess {
     /// Whether the bot's scratch tmpfs has no free block left, seen through the root of
     /// a process inside the sandbox.
     fn scratch_full(&self) -> bool {
-        let Some(pid) = self.pid else { return false };
-        let members = proctree::members(pid);
-        let Some(inner) = members.get(1) else {
-            return false;
-        };
-        let path = PathBuf::from(format!(
-            "/proc/{inner}/root{}",
-            super::sandbox::jail::SCRATCH
-        ));
-        nix::sys::statvfs::statvfs(&path).is_ok_and(|s| s.blocks_available() == 0)
+        if self.scratch.get().is_none() {
+            let members = self.pid.map(proctree::members).unwrap_or_default();
+            let Some(inner) = members.get(1) else {
+                return false;
+            };
+            let _ = self.scratch.set(PathBuf::from(format!(
+                "/proc/{inner}/root{}",
+                super::sandbox::jail::SCRATCH
+            )));
+        }
+        self.scratch
+            .get()
+            .is_some_and(|p| nix::sys::statvfs::statvfs(p).is_ok_and(|s| s.blocks_available() == 0))
     }
 
     /// Kills every process of the bot: its cgroup, its process tree and its group.

@@ -132,7 +132,7 @@ impl Session {
         let deadline: Option<tokio::time::Instant> = limit.map(|l| (since + l).into());
         if let Err(e) = send(&mut self.stdin, &ServerMessage::sense(sense), deadline).await {
             let (status, failure) = write_failure(e, sense.step);
-            return self.fault_or_limit(status, failure, sense.step);
+            return self.limit_or(Verdict::Fault(status, failure), sense.step);
         }
         let next = loop {
             let read = async {
@@ -158,22 +158,14 @@ impl Session {
                     "no answer to step {} within the {what} limit of {ms} ms",
                     sense.step
                 );
-                return self.fault_or_limit(
-                    MatchStatus::Timeout,
-                    failure(reason, sense.step),
-                    sense.step,
-                );
+                return self.fault_or_limit(MatchStatus::Timeout, reason, sense.step);
             }
             Ok(None) => {
                 let reason = format!(
                     "the bot closed its stdout (or exited) before answering step {}",
                     sense.step
                 );
-                return self.fault_or_limit(
-                    MatchStatus::Crashed,
-                    failure(reason, sense.step),
-                    sense.step,
-                );
+                return self.fault_or_limit(MatchStatus::Crashed, reason, sense.step);
             }
             Ok(Some(Err(AnyDelimiterCodecError::MaxChunkLengthExceeded))) => {
                 let line = self.replies.read_buffer().to_vec();
@@ -181,11 +173,7 @@ impl Session {
             }
             Ok(Some(Err(AnyDelimiterCodecError::Io(e)))) => {
                 let reason = format!("reading the bot's stdout failed: {e}");
-                return self.fault_or_limit(
-                    MatchStatus::Crashed,
-                    failure(reason, sense.step),
-                    sense.step,
-                );
+                return self.fault_or_limit(MatchStatus::Crashed, reason, sense.step);
             }
             Ok(Some(Ok(line))) => line,
         };
@@ -206,11 +194,18 @@ impl Session {
         }
     }
 
-    /// A limit hit explains a crash or a timeout better than the symptom does.
-    fn fault_or_limit(&self, status: MatchStatus, failure: Failure, step: u32) -> Verdict {
+    /// The fault `status` at `step` because of `reason`, unless a limit hit explains it
+    /// better.
+    fn fault_or_limit(&self, status: MatchStatus, reason: String, step: u32) -> Verdict {
+        self.limit_or(Verdict::Fault(status, failure(reason, step)), step)
+    }
+
+    /// A limit hit explains a crash or a timeout better than the symptom does: the
+    /// limit's verdict if one was hit, else `verdict`.
+    fn limit_or(&self, verdict: Verdict, step: u32) -> Verdict {
         match self.process.limit_hit() {
             Some(kind) => self.limit_fault(kind, step),
-            None => Verdict::Fault(status, failure),
+            None => verdict,
         }
     }
 

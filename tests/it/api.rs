@@ -8,35 +8,9 @@ use reqwest::Method;
 use serde_json::{Value, json};
 
 use crate::support::{
-    ADMIN, TestServer, adapter_bot_files, mazearena, root, shared_maze, simple_bot_files,
+    ADMIN, TestServer, adapter_bot_files, mazearena, register, root, shared_maze, simple_bot_files,
+    wait_match,
 };
-
-const FINAL: &[&str] = &[
-    "finished",
-    "step_limit",
-    "timeout",
-    "crashed",
-    "protocol_error",
-    "memory_limit",
-    "process_limit",
-    "scratch_limit",
-    "aborted",
-];
-
-async fn register(server: &TestServer, name: &str, command: &str, files: Value) -> (i64, String) {
-    let (s, v) = server
-        .post(
-            "/api/bots",
-            json!({"name": name, "command": command, "files": files}),
-            None,
-        )
-        .await;
-    assert_eq!(s, 201, "{v}");
-    (
-        v["bot_id"].as_i64().unwrap(),
-        v["owner_token"].as_str().unwrap().to_string(),
-    )
-}
 
 async fn upload_maze(server: &TestServer, name: &str, path: &std::path::Path, hidden: bool) -> i64 {
     let layout = std::fs::read_to_string(path).unwrap();
@@ -49,19 +23,6 @@ async fn upload_maze(server: &TestServer, name: &str, path: &std::path::Path, hi
         .await;
     assert_eq!(s, 201, "{v}");
     v["maze_id"].as_i64().unwrap()
-}
-
-async fn wait_match(server: &TestServer, id: i64) -> Value {
-    let deadline = Instant::now() + Duration::from_secs(60);
-    loop {
-        let (s, v) = server.get(&format!("/api/matches/{id}"), None).await;
-        assert_eq!(s, 200, "{v}");
-        if FINAL.contains(&v["status"].as_str().unwrap()) {
-            return v;
-        }
-        assert!(Instant::now() < deadline, "match {id} did not end: {v}");
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
 }
 
 async fn wait_tournament(server: &TestServer, id: i64, timeout: Duration) -> Value {

@@ -4,13 +4,12 @@
 //! process of the bot may be left.
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use serde_json::{Value, json};
 
 use crate::support::{
-    ADMIN, TestServer, full_sandbox, mazearena, processes_matching, root, shared_maze,
-    simple_bot_files,
+    ADMIN, TestServer, full_sandbox, mazearena, processes_matching, register, root, shared_maze,
+    simple_bot_files, wait_match,
 };
 
 const HOSTILE: &str = "tests/fixtures/bots/hostile";
@@ -253,38 +252,12 @@ fn nothing_a_bot_writes_survives_its_match() {
     assert!(!root().join(HOSTILE).join("kept.txt").exists());
 }
 
-async fn register(server: &TestServer, name: &str, command: &str, files: Value) -> (i64, String) {
-    let (status, body) = server
-        .post(
-            "/api/bots",
-            json!({"name": name, "command": command, "files": files}),
-            None,
-        )
-        .await;
-    assert_eq!(status, 201, "{body}");
-    (
-        body["bot_id"].as_i64().unwrap(),
-        body["owner_token"].as_str().unwrap().to_string(),
-    )
-}
-
 fn hostile_files(script: &str) -> Value {
     let dir = root().join(HOSTILE);
     json!({
         script: std::fs::read_to_string(dir.join(script)).unwrap(),
         "_hostile.py": std::fs::read_to_string(dir.join("_hostile.py")).unwrap(),
     })
-}
-
-async fn finished(server: &TestServer, id: i64) -> Value {
-    for _ in 0..600 {
-        let (_, m) = server.get(&format!("/api/matches/{id}"), None).await;
-        if !matches!(m["status"].as_str(), Some("queued" | "running")) {
-            return m;
-        }
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
-    panic!("match {id} did not end");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -352,7 +325,7 @@ async fn hostile_bots_on_a_real_server_are_contained_and_an_honest_match_is_unaf
     }
     let mut honest_scores = Vec::new();
     for (id, want, token) in &matches {
-        let m = finished(&server, *id).await;
+        let m = wait_match(&server, *id).await;
         assert_eq!(m["status"], *want, "{m}");
         let (_, log) = server
             .get(&format!("/api/matches/{id}/log"), Some(token))

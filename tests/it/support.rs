@@ -2,6 +2,9 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
 
 use mazearena::engine::{Maze, mazefile};
 use mazearena::runner::{BotSpec, Sandbox};
@@ -283,4 +286,52 @@ pub fn adapter_bot_files() -> serde_json::Value {
         "udacity_adapter.py": read("bots/python/udacity_adapter.py"),
         "robot.py": read("tests/fixtures/robot_py/robot.py"),
     })
+}
+
+/// The statuses a match ends with.
+pub const FINAL: &[&str] = &[
+    "finished",
+    "step_limit",
+    "timeout",
+    "crashed",
+    "protocol_error",
+    "memory_limit",
+    "process_limit",
+    "scratch_limit",
+    "aborted",
+];
+
+/// Registers a bot from a JSON file map; returns its id and owner token.
+pub async fn register(
+    server: &TestServer,
+    name: &str,
+    command: &str,
+    files: Value,
+) -> (i64, String) {
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": name, "command": command, "files": files}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    (
+        v["bot_id"].as_i64().unwrap(),
+        v["owner_token"].as_str().unwrap().to_string(),
+    )
+}
+
+/// Waits (at most 60 s) until match `id` has a final status; returns its view.
+pub async fn wait_match(server: &TestServer, id: i64) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let (s, v) = server.get(&format!("/api/matches/{id}"), None).await;
+        assert_eq!(s, 200, "{v}");
+        if FINAL.contains(&v["status"].as_str().unwrap()) {
+            return v;
+        }
+        assert!(Instant::now() < deadline, "match {id} did not end: {v}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
 }

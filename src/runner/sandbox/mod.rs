@@ -24,6 +24,9 @@ use std::sync::Arc;
 
 pub use uid::UidLease;
 
+/// The fields of `/proc/self/status` as a process in the sandbox sees them.
+type Status = std::collections::BTreeMap<String, String>;
+
 /// Where the `mazearena` binary is mounted inside the sandbox.
 pub const HELPER_IN_SANDBOX: &str = "/run/mazearena/mazearena";
 
@@ -62,6 +65,23 @@ pub struct FullSandbox {
     pub env: Vec<(String, String)>,
 }
 
+impl FullSandbox {
+    /// The command that runs `jail` inside a sandbox made with bubblewrap arguments
+    /// `bwrap_args` (from [`view::bwrap_args`]), with an empty environment of its own.
+    pub fn command(
+        &self,
+        bwrap_args: Vec<std::ffi::OsString>,
+        jail: &jail::JailArgs,
+    ) -> std::process::Command {
+        let mut cmd = std::process::Command::new(&self.bwrap);
+        cmd.args(bwrap_args)
+            .arg(JAIL_SUBCOMMAND)
+            .args(jail.to_args())
+            .env_clear();
+        cmd
+    }
+}
+
 /// Why the full sandbox cannot run here.
 #[derive(Debug, Clone, thiserror::Error)]
 #[error("the sandbox is not available: {0}")]
@@ -96,6 +116,11 @@ impl Sandbox {
     /// [`Unavailable`] with the reason when bubblewrap is missing or cannot make the
     /// namespaces, or the jail step fails.
     pub fn full(helper: &Path, hide: &[PathBuf]) -> Result<Sandbox, Unavailable> {
+        Sandbox::full_tested(helper, hide).map(|(sandbox, _)| sandbox)
+    }
+
+    /// [`Sandbox::full`], with the fields of `/proc/self/status` its test command saw.
+    fn full_tested(helper: &Path, hide: &[PathBuf]) -> Result<(Sandbox, Status), Unavailable> {
         let bwrap = find_program("bwrap").ok_or_else(|| {
             Unavailable(
                 "bubblewrap (`bwrap`) is not installed (Debian: apt-get install bubblewrap)".into(),
@@ -122,11 +147,11 @@ impl Sandbox {
                 )));
             }
         }
-        Ok(sandbox)
+        Ok((sandbox, status))
     }
 
     /// Runs `cat /proc/self/status` in the sandbox and returns its fields.
-    fn self_test(&self) -> Result<std::collections::BTreeMap<String, String>, Unavailable> {
+    fn self_test(&self) -> Result<Status, Unavailable> {
         let Sandbox::Full(full) = self else {
             return Err(Unavailable("no sandbox".into()));
         };
@@ -139,11 +164,8 @@ impl Sandbox {
             command: vec!["cat".into(), "/proc/self/status".into()],
             ..jail::JailArgs::default()
         };
-        let out = std::process::Command::new(&full.bwrap)
-            .args(args)
-            .arg(JAIL_SUBCOMMAND)
-            .args(jail.to_args())
-            .env_clear()
+        let out = full
+            .command(args, &jail)
             .stdin(std::process::Stdio::null())
             .output()
             .map_err(|e| Unavailable(format!("cannot run {}: {e}", full.bwrap.display())))?;
@@ -193,12 +215,11 @@ impl Sandbox {
                 "not root: each match gets a user namespace".into()
             },
         ));
-        let result = Sandbox::full(helper, &[]);
-        let status = result.as_ref().ok().map(|s| s.self_test());
-        let field = |k: &str| match &status {
-            Some(Ok(s)) => s.get(k).cloned().unwrap_or_default(),
-            _ => String::new(),
+        let (result, status) = match Sandbox::full_tested(helper, &[]) {
+            Ok((sandbox, status)) => (Ok(sandbox), status),
+            Err(e) => (Err(e), Status::new()),
         };
+        let field = |k: &str| status.get(k).cloned().unwrap_or_default();
         checks.push(check(
             "namespaces",
             result.is_ok(),
@@ -233,7 +254,10 @@ impl Sandbox {
                 "not available in this kernel (optional: the namespaces still hold)".into()
             },
         ));
-        let cg = cgroup::CgroupRoot::detect();
+        let cg = match &result {
+            Ok(Sandbox::Full(f)) => f.cgroups.clone(),
+            _ => cgroup::CgroupRoot::detect(),
+        };
         checks.push(check(
             "cgroups",
             cg.is_ok(),
