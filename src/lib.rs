@@ -6,17 +6,20 @@
 //! - [`protocol`]: the bot protocol v1 messages and the strict decoding of bot replies.
 //! - [`runner`]: runs one bot process against one maze and returns a [`runner::MatchRecord`].
 //! - [`storage`]: the only SQL: bots, mazes, the match queue, tournaments, leaderboards.
-//! - [`worker`]: match workers that claim queued matches with a lease and record them.
+//! - [`worker`]: match workers that claim queued matches with a lease and record them;
+//!   [`builder`]: builds uploaded bot versions that have a build command.
 //! - [`api`]: the HTTP/JSON API (axum), with its OpenAPI document.
 //! - [`botfiles`]: safe unpacking of uploaded bots; [`manifest`]: `bot.toml` files.
 //! - [`metrics`]: Prometheus metrics.
-//! - [`cli`]: the `mazearena` command line (run, maze, serve, tournament).
+//! - [`web`]: HTML: the replay viewer and the server's pages (pure rendering).
+//! - [`cli`]: the `mazearena` command line (run, replay, match, maze, serve, tournament).
 //!
 //! Dependencies point inwards: `engine` <- `protocol` <- `runner` <- `worker`/`storage`
 //! <- `api`, `cli`.
 
 pub mod api;
 pub mod botfiles;
+pub mod builder;
 pub mod cli;
 pub mod engine;
 pub mod manifest;
@@ -24,4 +27,5 @@ pub mod metrics;
 pub mod protocol;
 pub mod runner;
 pub mod storage;
+pub mod web;
 pub mod worker;

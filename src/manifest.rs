@@ -7,6 +7,7 @@
 //! build = "cargo build --release" # optional, run once in the folder before playing
 //! report = "seed 004, section 4.1"  # optional: where the strategy comes from
 //! claimed = { test_maze_01 = 18.133 } # optional: scores its author reported, by maze name
+//! env = { ALPHA = "0.5" }         # optional: environment variables for the bot
 //! ```
 //! A folder with several bots lists them as `[[bot]]` tables with the same keys.
 
@@ -40,6 +41,9 @@ pub struct BotManifest {
     /// Scores the strategy's author reported, by maze file name without extension.
     #[serde(default)]
     pub claimed: std::collections::BTreeMap<String, f64>,
+    /// Environment variables for the bot (the only ones of ours it gets).
+    #[serde(default)]
+    pub env: std::collections::BTreeMap<String, String>,
     /// The folder (where the manifest is); filled in when loading.
     #[serde(skip)]
     pub dir: PathBuf,
@@ -103,6 +107,10 @@ pub fn parse(text: &str, dir: &Path, path: &Path) -> Result<Vec<BotManifest>, Ma
                 "every bot needs a non-empty `name` and `command`".into(),
             ));
         }
+        let env: Vec<(String, String)> =
+            b.env.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        crate::runner::botenv::check(&env)
+            .map_err(|e| invalid(format!("bot {:?}: env: {e}", b.name)))?;
         b.dir = dir.to_path_buf();
     }
     Ok(bots)
@@ -184,6 +192,13 @@ mod tests {
         .unwrap();
         assert_eq!(many.len(), 2);
         assert_eq!(many[1].build.as_deref(), Some("make"));
+        let env = parse(
+            "name = \"a\"\ncommand = \"x\"\nenv = { ALPHA = \"0.5\" }\n",
+            Path::new("/b"),
+            Path::new("x"),
+        )
+        .unwrap();
+        assert_eq!(env[0].env["ALPHA"], "0.5");
     }
 
     #[test]
@@ -193,6 +208,7 @@ mod tests {
             "command = 1\n",
             "name = \"\"\ncommand = \"x\"\n",
             "[[bot]]\n",
+            "name = \"a\"\ncommand = \"x\"\nenv = { PATH = \"/evil\" }\n",
         ] {
             let e = parse(bad, Path::new("/b"), Path::new("bot.toml")).unwrap_err();
             assert!(e.to_string().starts_with("bot.toml: "), "{e}");

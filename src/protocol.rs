@@ -20,6 +20,14 @@ pub const MAX_LINE_BYTES: usize = 64 * 1024;
 /// How much of an offending line a match record keeps.
 pub const EXCERPT_BYTES: usize = 200;
 
+/// The most JSON bytes of one step's `debug` object that a trace keeps (docs/PROTOCOL.md
+/// "Debug drawing"): enough for a 32x32 grid of values, small enough that a match's
+/// trace stays cheap to store and to draw.
+pub const MAX_DEBUG_STEP_BYTES: usize = 16 * 1024;
+
+/// The most `debug` bytes a whole match keeps; later steps' debug objects are dropped.
+pub const MAX_DEBUG_MATCH_BYTES: usize = 512 * 1024;
+
 /// A message from the server to the bot, one JSON object per line.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
@@ -108,7 +116,27 @@ pub enum ProtocolError {
     LineTooLong,
 }
 
+/// A decoded reply: the action the referee plays, and the bot's optional `debug`
+/// object (the debug-drawing extension), kept as sent and never read by the referee.
+#[derive(Debug, Clone)]
+pub struct Answer {
+    /// What the referee plays.
+    pub action: Action,
+    /// The `debug` field as sent, if any (any JSON value; the runner keeps objects only).
+    pub debug: Option<Box<RawValue>>,
+}
+
 /// Decodes one reply line (without its "\n") into an [`Action`].
+///
+/// See [`decode_answer`], which also returns the `debug` field.
+///
+/// # Errors
+/// A [`ProtocolError`] saying what is wrong.
+pub fn decode_reply(line: &[u8]) -> Result<Action, ProtocolError> {
+    decode_answer(line).map(|a| a.action)
+}
+
+/// Decodes one reply line (without its "\n") into an [`Answer`].
 ///
 /// Follows PROTOCOL-v1's decided edge cases: `{"reset": true}` is a reset whatever else
 /// the object holds; any other `reset` value is ignored; rotation and movement must be
@@ -118,7 +146,7 @@ pub enum ProtocolError {
 ///
 /// # Errors
 /// A [`ProtocolError`] saying what is wrong.
-pub fn decode_reply(line: &[u8]) -> Result<Action, ProtocolError> {
+pub fn decode_answer(line: &[u8]) -> Result<Answer, ProtocolError> {
     if line.len() > MAX_LINE_BYTES {
         return Err(ProtocolError::LineTooLong);
     }
@@ -130,12 +158,19 @@ pub fn decode_reply(line: &[u8]) -> Result<Action, ProtocolError> {
     }
     let fields: BTreeMap<String, &RawValue> =
         serde_json::from_str(raw.get()).map_err(|e| ProtocolError::NotJson(e.to_string()))?;
+    let debug = fields.get("debug").map(|v| (*v).to_owned());
     if fields.get("reset").is_some_and(|v| v.get() == "true") {
-        return Ok(Action::RESET);
+        return Ok(Answer {
+            action: Action::RESET,
+            debug,
+        });
     }
     let rotation = integer_field(&fields, "rotation")?;
     let movement = integer_field(&fields, "movement")?;
-    Ok(Action::Move { rotation, movement })
+    Ok(Answer {
+        action: Action::Move { rotation, movement },
+        debug,
+    })
 }
 
 fn integer_field(
@@ -197,6 +232,24 @@ mod tests {
         assert_eq!(
             ok(r#"{"rotation":0,"movement":2,"debug":{"x":[1,2]}}"#),
             Action::turn_move(0, 2)
+        );
+    }
+
+    #[test]
+    fn debug_is_kept_as_sent_beside_moves_and_resets() {
+        let a =
+            decode_answer(br#"{"rotation":0,"movement":1,"debug":{"text":"hi","path":[[0,1]]}}"#)
+                .unwrap();
+        assert_eq!(a.action, Action::turn_move(0, 1));
+        assert_eq!(a.debug.unwrap().get(), r#"{"text":"hi","path":[[0,1]]}"#);
+        let r = decode_answer(br#"{"reset":true,"debug":{"text":"back"}}"#).unwrap();
+        assert_eq!(r.action, Action::RESET);
+        assert!(r.debug.is_some());
+        assert!(
+            decode_answer(br#"{"rotation":0,"movement":1}"#)
+                .unwrap()
+                .debug
+                .is_none()
         );
     }
 

@@ -176,10 +176,8 @@ impl Worker {
                 return;
             }
         };
-        let bot = BotSpec {
-            command: job.command.clone(),
-            dir: PathBuf::from(&job.dir),
-        };
+        let mut bot = BotSpec::new(job.command.clone(), PathBuf::from(&job.dir));
+        bot.env = crate::storage::bots::env_pairs(&job.env);
         let started = Instant::now();
         let lease_ms = self.config.lease.as_millis() as i64;
         let mut renew = tokio::time::interval(self.config.lease / 3);

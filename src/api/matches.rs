@@ -9,19 +9,20 @@ use axum::extract::State;
 use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use utoipa::ToSchema;
+use utoipa::{IntoParams, ToSchema};
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 use super::AppState;
 use super::auth::Caller;
-use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
+use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
 use super::mazes::{find_maze, hidden_error};
-use crate::storage::matches::MatchRow;
+use crate::storage::bots::build_status;
+use crate::storage::matches::{MatchFilter, MatchRow, Page};
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
-        .routes(routes!(create_match))
+        .routes(routes!(create_match, list_matches))
         .routes(routes!(get_match))
         .routes(routes!(get_match_replay))
         .routes(routes!(get_match_log))
@@ -177,6 +178,13 @@ async fn create_match(
     if let Some(reason) = &bot.paused_reason {
         return Err(paused_error(bot.bot_id, reason));
     }
+    if bot.build_status == build_status::FAILED {
+        return Err(ApiError::Conflict(format!(
+            "version {} of bot {} failed to build, so it cannot play; its owner sees the log at \
+             GET /api/bots/{}/versions/{}/build-log",
+            bot.version, bot.bot_id, bot.bot_id, bot.version
+        )));
+    }
     let maze = find_maze(&state, body.maze_id).await?;
     if maze.hidden && !caller.is_admin() {
         return Err(hidden_error(maze.maze_id, &caller));
@@ -214,20 +222,24 @@ async fn get_match(
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<MatchView>> {
     let row = find_match(&state, id).await?;
-    let record = parse_record(&row);
     let reveal = !row.maze_hidden || caller.is_admin();
+    Ok(axum::Json(match_view(row, reveal)))
+}
+
+/// A match as the caller may see it (`reveal`: not a hidden maze's, or the admin).
+pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
+    let record = parse_record(&row);
     let field = |k: &str| match record.get(k) {
         Some(v) if reveal => v.clone(),
         _ => Value::Null,
     };
-    Ok(axum::Json(MatchView {
+    MatchView {
         match_id: row.match_id,
         bot_id: row.bot_id,
         bot_version: row.version,
         maze_id: row.maze_id,
         tournament_id: row.tournament_id,
         seed: row.seed,
-        status: row.status.clone(),
         score: row.score,
         run0_steps: row.run0_steps,
         run1_steps: row.run1_steps,
@@ -250,6 +262,124 @@ async fn get_match(
             .and_then(Value::as_str)
             .map(String::from),
         timings: field("timings"),
+        status: row.status,
+    }
+}
+
+/// Filters and page of `GET /api/matches`.
+#[derive(Debug, Deserialize, IntoParams)]
+#[serde(deny_unknown_fields)]
+pub struct MatchListQuery {
+    /// Only this bot's matches (every version).
+    pub bot_id: Option<i64>,
+    /// Only this tournament's.
+    pub tournament_id: Option<i64>,
+    /// Only this maze's.
+    pub maze_id: Option<i64>,
+    /// Only this status: queued, running, finished, step_limit, timeout, crashed,
+    /// protocol_error, memory_limit, process_limit, scratch_limit, aborted.
+    pub status: Option<String>,
+    /// Rows to skip (default 0).
+    pub offset: Option<i64>,
+    /// Rows per page, 1 to 200 (default 50).
+    pub limit: Option<i64>,
+}
+
+/// One page of a list.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MatchPage {
+    /// The matches, newest first.
+    pub items: Vec<MatchView>,
+    /// How many matches pass the filters.
+    pub total: i64,
+    /// Rows skipped.
+    pub offset: i64,
+    /// Rows per page.
+    pub limit: i64,
+}
+
+/// Every status a match can have.
+pub const STATUSES: [&str; 11] = [
+    "queued",
+    "running",
+    "finished",
+    "step_limit",
+    "timeout",
+    "crashed",
+    "protocol_error",
+    "memory_limit",
+    "process_limit",
+    "scratch_limit",
+    "aborted",
+];
+
+impl MatchListQuery {
+    /// The storage filter and page, or a 400 naming the bad parameter.
+    pub(super) fn parse(&self) -> ApiResult<(MatchFilter, Page)> {
+        if let Some(s) = &self.status {
+            if !STATUSES.contains(&s.as_str()) {
+                return Err(ApiError::BadRequest(format!(
+                    "unknown status {s:?}: use one of {}",
+                    STATUSES.join(", ")
+                )));
+            }
+        }
+        Ok((
+            MatchFilter {
+                bot_id: self.bot_id,
+                tournament_id: self.tournament_id,
+                maze_id: self.maze_id,
+                status: self.status.clone(),
+            },
+            page(self.offset, self.limit)?,
+        ))
+    }
+}
+
+/// The page of a list from `offset` and `limit` (default 50, at most 200).
+pub(super) fn page(offset: Option<i64>, limit: Option<i64>) -> ApiResult<Page> {
+    let offset = offset.unwrap_or(0);
+    let limit = limit.unwrap_or(DEFAULT_PAGE);
+    if offset < 0 {
+        return Err(ApiError::BadRequest("`offset` must be 0 or more".into()));
+    }
+    if !(1..=MAX_PAGE).contains(&limit) {
+        return Err(ApiError::BadRequest(format!(
+            "`limit` must be 1 to {MAX_PAGE}"
+        )));
+    }
+    Ok(Page { offset, limit })
+}
+
+/// Rows per page of a list, unless asked.
+pub const DEFAULT_PAGE: i64 = 50;
+/// The most rows per page.
+pub const MAX_PAGE: i64 = 200;
+
+/// Matches, newest first, filtered by bot, tournament, maze and status (a hidden
+/// maze's matches show what `GET /api/matches/{id}` shows of them).
+#[utoipa::path(get, path = "/api/matches", tag = "matches",
+    params(MatchListQuery),
+    responses((status = 200, body = MatchPage), (status = 400, body = ErrorBody)))]
+async fn list_matches(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppQuery(q): AppQuery<MatchListQuery>,
+) -> ApiResult<axum::Json<MatchPage>> {
+    let (filter, page) = q.parse()?;
+    let (rows, total) = state.storage.list_matches(&filter, page).await?;
+    let admin = caller.is_admin();
+    Ok(axum::Json(MatchPage {
+        items: rows
+            .into_iter()
+            .map(|r| {
+                let reveal = !r.maze_hidden || admin;
+                match_view(r, reveal)
+            })
+            .collect(),
+        total,
+        offset: page.offset,
+        limit: page.limit,
     }))
 }
 
@@ -345,7 +475,7 @@ async fn find_match(state: &AppState, id: i64) -> ApiResult<MatchRow> {
         .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))
 }
 
-fn parse_record(row: &MatchRow) -> serde_json::Map<String, Value> {
+pub(super) fn parse_record(row: &MatchRow) -> serde_json::Map<String, Value> {
     row.record
         .as_deref()
         .and_then(|r| serde_json::from_str::<Value>(r).ok())

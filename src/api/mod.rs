@@ -1,7 +1,8 @@
 //! The HTTP/JSON API (axum): thin handlers that extract, call storage, and answer JSON.
 //!
 //! Routes (see `GET /api/openapi.json`, generated from these handlers):
-//! bots, mazes, matches, tournaments, leaderboard, plus `/healthz` and `/metrics`.
+//! bots, mazes, matches, tournaments, leaderboard, plus `/healthz` and `/metrics`; and
+//! the web pages ([`pages`]: `/`, `/bots`, `/mazes`, `/matches`, `/tournaments`).
 //! Every error has the shape `{"error":{"code":..,"message":..}}` ([`error`]).
 
 pub mod auth;
@@ -10,6 +11,7 @@ pub mod error;
 pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
+pub mod pages;
 pub mod system;
 pub mod tournaments;
 
@@ -101,6 +103,7 @@ pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
 pub fn app(state: AppState) -> Router {
     let (router, _) = routes();
     router
+        .merge(pages::router())
         .fallback(error::not_found)
         .method_not_allowed_fallback(error::method_not_allowed)
         .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))

@@ -5,13 +5,13 @@ use std::collections::BTreeSet;
 use axum::extract::State;
 use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
-use utoipa::ToSchema;
+use utoipa::{IntoParams, ToSchema};
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 use super::AppState;
 use super::auth::Caller;
-use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
+use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
 use super::matches::check_capacity;
 use crate::storage::leaderboard::{Scope, Standing};
 
@@ -20,7 +20,7 @@ pub const MAX_REPEATS: i64 = 100;
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
-        .routes(routes!(create_tournament))
+        .routes(routes!(create_tournament, list_tournaments))
         .routes(routes!(get_tournament))
 }
 
@@ -106,6 +106,11 @@ async fn create_tournament(
         if let Some(reason) = &bot.paused_reason {
             return Err(super::matches::paused_error(id, reason));
         }
+        if bot.build_status == crate::storage::bots::build_status::FAILED {
+            return Err(ApiError::Conflict(format!(
+                "the latest version of bot {id} failed to build, so it cannot play"
+            )));
+        }
         versions.push(bot.bot_version_id);
     }
     for &id in &body.maze_ids {
@@ -157,5 +162,73 @@ async fn get_tournament(
         done: t.done,
         total: t.total,
         standings,
+    }))
+}
+
+/// The page of `GET /api/tournaments`.
+#[derive(Debug, Deserialize, IntoParams)]
+#[serde(deny_unknown_fields)]
+pub struct TournamentListQuery {
+    /// Rows to skip (default 0).
+    pub offset: Option<i64>,
+    /// Rows per page, 1 to 200 (default 50).
+    pub limit: Option<i64>,
+}
+
+/// A tournament in a list.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct TournamentLine {
+    /// Id.
+    pub tournament_id: i64,
+    /// Name.
+    pub name: String,
+    /// Repeats of each bot x maze pair.
+    pub repeats: i64,
+    /// Matches played.
+    pub done: i64,
+    /// Matches in all.
+    pub total: i64,
+    /// Created at (unix ms).
+    pub created_at: i64,
+}
+
+/// One page of tournaments.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct TournamentPage {
+    /// Newest first.
+    pub items: Vec<TournamentLine>,
+    /// How many tournaments there are.
+    pub total: i64,
+    /// Rows skipped.
+    pub offset: i64,
+    /// Rows per page.
+    pub limit: i64,
+}
+
+/// Tournaments with their progress, newest first.
+#[utoipa::path(get, path = "/api/tournaments", tag = "tournaments",
+    params(TournamentListQuery),
+    responses((status = 200, body = TournamentPage), (status = 400, body = ErrorBody)))]
+async fn list_tournaments(
+    State(state): State<AppState>,
+    AppQuery(q): AppQuery<TournamentListQuery>,
+) -> ApiResult<axum::Json<TournamentPage>> {
+    let page = super::matches::page(q.offset, q.limit)?;
+    let (rows, total) = state.storage.list_tournaments(page).await?;
+    Ok(axum::Json(TournamentPage {
+        items: rows
+            .into_iter()
+            .map(|t| TournamentLine {
+                tournament_id: t.tournament_id,
+                name: t.name,
+                repeats: t.repeats,
+                done: t.done,
+                total: t.total,
+                created_at: t.created_at,
+            })
+            .collect(),
+        total,
+        offset: page.offset,
+        limit: page.limit,
     }))
 }

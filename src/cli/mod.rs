@@ -1,7 +1,9 @@
 //! The `mazearena` command line: one file per subcommand, each a thin layer over the
 //! engine and the runner.
 
+mod matches;
 mod maze;
+mod replay;
 mod report;
 mod run;
 mod sandbox;
@@ -38,6 +40,11 @@ pub enum Command {
     Tournament(tournament::TournamentArgs),
     /// Show each isolation mechanism of the sandbox and whether it works here.
     Doctor(sandbox::DoctorArgs),
+    /// Write a replay file (from `run --replay`) as a self-contained HTML viewer.
+    Replay(replay::ReplayArgs),
+    /// Stored matches: `match show ID` prints one, with its reason and stderr tail.
+    #[command(subcommand)]
+    Match(matches::MatchCommand),
 }
 
 /// The jail step inside the sandbox, when this process was started as
@@ -63,6 +70,8 @@ pub fn run() -> anyhow::Result<()> {
         Command::Serve(args) => serve::run(args),
         Command::Tournament(args) => tournament::run(args),
         Command::Doctor(args) => sandbox::doctor(args),
+        Command::Replay(args) => replay::run(args),
+        Command::Match(cmd) => matches::run(cmd),
     }
 }
 

@@ -25,9 +25,67 @@ pub(super) fn print_table(rows: &[Standing]) {
     }
 }
 
+/// For each bot with matches that did not finish: how many, by status, and the first
+/// one's id and reason, so its author knows where to look.
+pub(super) fn print_failures(results: &[MatchResult], database: &str) {
+    let db = if database == "sqlite://mazearena.db" {
+        String::new()
+    } else {
+        format!(" --database {database}")
+    };
+    let mut bots: Vec<&str> = results.iter().map(|r| r.bot.as_str()).collect();
+    bots.dedup();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut header = false;
+    for bot in bots {
+        if !seen.insert(bot) {
+            continue;
+        }
+        let failed: Vec<&MatchResult> = results
+            .iter()
+            .filter(|r| r.bot == bot && r.status != "finished")
+            .collect();
+        let Some(first) = failed.first() else {
+            continue;
+        };
+        if !header {
+            println!();
+            println!("Matches that did not finish:");
+            header = true;
+        }
+        let mut by_status: std::collections::BTreeMap<&str, usize> = Default::default();
+        for f in &failed {
+            *by_status.entry(f.status.as_str()).or_default() += 1;
+        }
+        let counts: Vec<String> = by_status.iter().map(|(s, n)| format!("{n} {s}")).collect();
+        let total = results.iter().filter(|r| r.bot == bot).count();
+        println!(
+            "  {bot}: {} of {total} ({})",
+            failed.len(),
+            counts.join(", ")
+        );
+        let why = match (&first.reason, first.step) {
+            (Some(reason), _) => reason.clone(),
+            (None, _) if first.status == "step_limit" => {
+                "the 1000-step budget ran out before run 1 reached the goal room".into()
+            }
+            (None, _) => first.status.clone(),
+        };
+        println!(
+            "    first: match {} on {} (seed {}): {} — {why}",
+            first.match_id, first.maze, first.repeat, first.status
+        );
+        println!(
+            "    see it: mazearena match show {}{db} --html match-{}.html",
+            first.match_id, first.match_id
+        );
+    }
+}
+
 /// One played match, for reports.
 #[derive(Debug, Clone, serde::Serialize)]
 pub(super) struct MatchResult {
+    match_id: i64,
     bot: String,
     maze: String,
     repeat: i64,
@@ -35,6 +93,10 @@ pub(super) struct MatchResult {
     run0_steps: Option<i64>,
     run1_steps: Option<i64>,
     score: Option<f64>,
+    /// Why it did not finish (null when it finished or ran out of steps).
+    reason: Option<String>,
+    /// The step the failure happened at.
+    step: Option<u64>,
 }
 
 /// Every match of a tournament with its bot's and maze's names.
@@ -62,7 +124,23 @@ pub(super) async fn results(
                     .map_or_else(String::new, |m| m.name),
             );
         }
+        let error = row
+            .record
+            .as_deref()
+            .and_then(|r| serde_json::from_str::<serde_json::Value>(r).ok())
+            .and_then(|v| v.get("error").cloned())
+            .filter(|e| !e.is_null());
         out.push(MatchResult {
+            match_id: row.match_id,
+            reason: error
+                .as_ref()
+                .and_then(|e| e.get("reason"))
+                .and_then(|r| r.as_str())
+                .map(String::from),
+            step: error
+                .as_ref()
+                .and_then(|e| e.get("step"))
+                .and_then(serde_json::Value::as_u64),
             bot: bot_names[&row.bot_id].clone(),
             maze: maze_names[&row.maze_id].clone(),
             repeat: row.repeat.unwrap_or(0),

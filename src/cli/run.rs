@@ -49,9 +49,24 @@ pub struct RunArgs {
     scratch_mb: u64,
     #[command(flatten)]
     sandbox: super::sandbox::SandboxArgs,
-    /// Write the full match record with its per-step trace (JSON) to this file.
+    /// Write the full match record with its per-step trace and the maze (JSON) to this
+    /// file; `mazearena replay FILE -o match.html` shows it.
     #[arg(long)]
     replay: Option<PathBuf>,
+    /// Write the match as a self-contained HTML replay viewer to this file.
+    #[arg(long)]
+    html: Option<PathBuf>,
+    /// Print every exchange (sensors in, answer out) and the bot's stderr as it comes.
+    #[arg(long, short = 'v', conflicts_with = "json")]
+    verbose: bool,
+    /// An environment variable for the bot, KEY=VALUE (repeatable); the bot gets no
+    /// other variable of yours.
+    #[arg(long = "bot-env", value_name = "KEY=VALUE", value_parser = parse_bot_env)]
+    bot_env: Vec<(String, String)>,
+}
+
+pub(super) fn parse_bot_env(text: &str) -> Result<(String, String), String> {
+    runner::botenv::parse_assignment(text).map_err(|e| e.to_string())
 }
 
 /// Runs `mazearena run`.
@@ -79,12 +94,15 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         ..Limits::default()
     };
     let sandbox = args.sandbox.open(&[])?;
+    runner::botenv::check(&args.bot_env)?;
     let bot = BotSpec {
         command: args.bot.clone(),
         dir,
+        env: args.bot_env.clone(),
+        echo_stderr: args.verbose,
     };
     let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
-    let json = args.json;
+    let (json, verbose) = (args.json, args.verbose);
     if !json {
         println!(
             "Maze {} ({}x{}), bot `{}`, seed {}",
@@ -103,15 +121,31 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         limits,
         &sandbox,
         |step| {
+            if verbose {
+                print_exchange(step);
+            }
             if !json {
                 print_step(step);
             }
         },
     ));
+    let mut record = record;
+    record.maze_layout = Some(crate::engine::mazefile::numeric::write(&maze));
     if let Some(path) = &args.replay {
         let text = serde_json::to_string(&record).context("cannot encode the match record")?;
         std::fs::write(path, text)
             .with_context(|| format!("cannot write the replay to {}", path.display()))?;
+    }
+    if let Some(path) = &args.html {
+        let title = format!(
+            "{} on {} (seed {})",
+            args.bot,
+            args.maze
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned()),
+            args.seed
+        );
+        super::replay::write_html(&record, Some(&maze), title, path)?;
     }
     if json {
         let summary =
@@ -121,6 +155,36 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         print_result(&record);
     }
     Ok(())
+}
+
+/// `--verbose`: one line per exchange, as the bot saw it and answered.
+fn print_exchange(step: &TraceStep) {
+    let r = &step.report;
+    let answer = match r.action {
+        crate::engine::Action::Move { rotation, movement } => {
+            format!("{{\"rotation\":{rotation},\"movement\":{movement}}}")
+        }
+        crate::engine::Action::Reset { .. } => "{\"reset\":true}".to_string(),
+    };
+    println!(
+        "step {:>4} run {}: sensors {:?} -> {answer}  => ({},{}) {:?}{}  [{:.1} ms]",
+        r.step,
+        r.run,
+        r.sensors,
+        r.position.x,
+        r.position.y,
+        r.heading,
+        if r.blocked { " blocked" } else { "" },
+        step.answer_us as f64 / 1000.0
+    );
+    if let Some(text) = step
+        .debug
+        .as_ref()
+        .and_then(|d| d.get("text"))
+        .and_then(|t| t.as_str())
+    {
+        println!("           debug: {text}");
+    }
 }
 
 fn print_step(step: &TraceStep) {
@@ -166,6 +230,9 @@ fn print_result(record: &MatchRecord) {
                 record.total_steps
             );
         }
+    }
+    for n in &record.notices {
+        println!("Note: {}", n.message);
     }
     if let Some(error) = &record.error {
         println!("Reason: {}", error.reason);

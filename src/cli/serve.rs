@@ -151,6 +151,12 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
 
     let shutdown = Shutdown::default();
     let tracker = TaskTracker::new();
+    tracker.spawn(crate::builder::run_builds(
+        storage.clone(),
+        sandbox.clone(),
+        wake.clone(),
+        shutdown.stop_claiming.clone(),
+    ));
     worker::spawn_workers(
         &tracker,
         storage.clone(),

@@ -25,7 +25,7 @@ use crate::storage::leaderboard::Scope;
 use crate::storage::mazes::NewMaze;
 use crate::worker::{self, Shutdown, WorkerConfig};
 
-use super::report::{markdown, print_table, results};
+use super::report::{markdown, print_failures, print_table, results};
 
 /// Arguments of `mazearena tournament`.
 #[derive(Debug, Args)]
@@ -59,6 +59,10 @@ pub struct TournamentArgs {
     /// score, the score the bot's manifest says its author claimed), then the standings.
     #[arg(long)]
     markdown: bool,
+    /// An environment variable for every bot, KEY=VALUE (repeatable; over a manifest's
+    /// `env` of the same name).
+    #[arg(long = "bot-env", value_name = "KEY=VALUE", value_parser = super::run::parse_bot_env)]
+    bot_env: Vec<(String, String)>,
     #[command(flatten)]
     sandbox: super::sandbox::SandboxArgs,
 }
@@ -75,6 +79,11 @@ pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
     let mut bots = Vec::new();
     for path in &args.bots {
         bots.extend(manifest::load(path)?);
+    }
+    for b in &mut bots {
+        b.env.extend(args.bot_env.iter().cloned());
+        let env: Vec<(String, String)> = b.env.clone().into_iter().collect();
+        runner::botenv::check(&env).with_context(|| format!("bot {}: env", b.name))?;
     }
     let mut names = std::collections::BTreeSet::new();
     for b in &bots {
@@ -266,6 +275,7 @@ async fn play(
         print!("{}", markdown(&bots, &results, &standings));
     } else {
         print_table(&standings);
+        print_failures(&results, &args.database);
         let per_min = t.done as f64 / elapsed.as_secs_f64().max(1e-9) * 60.0;
         println!(
             "{}/{} matches in {:.1} s ({per_min:.0} matches per minute); tournament id {}",
@@ -288,12 +298,16 @@ async fn play(
 /// Finds or registers a local bot; a new version when its command or files changed.
 async fn register(storage: &Storage, bot: &BotManifest) -> anyhow::Result<i64> {
     let dir = bot.dir.display().to_string();
-    let hash = dir_hash(&bot.dir, &bot.command);
+    let env: Vec<(String, String)> = bot.env.clone().into_iter().collect();
+    let env_text = crate::storage::bots::env_json(&env);
+    let hash = dir_hash(&bot.dir, &format!("{}\0{env_text}", bot.command));
     let new = NewVersion {
         command: &bot.command,
         dir: &dir,
         files_sha256: &hash,
         file_count: 0,
+        build_command: None,
+        env: &env,
     };
     if let Some(existing) = storage.get_bot_by_name(&bot.name).await? {
         let latest = storage

@@ -42,58 +42,35 @@ pub enum BuildError {
     },
 }
 
+/// The most memory a build's processes may hold together (in the sandbox, with a
+/// cgroup): compilers need more than bots.
+pub const BUILD_MEMORY_BYTES: u64 = 2 << 30;
+
+/// How much of a build's output (stdout and stderr, interleaved) is kept.
+pub const BUILD_LOG_BYTES: usize = 64 * 1024;
+
+/// How a build ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BuildOutcome {
+    /// Whether it exited with status 0 in time.
+    pub ok: bool,
+    /// How it ended, for people ("exit status: 2", "took more than 600 s").
+    pub status: String,
+    /// The end of its output ([`BUILD_LOG_BYTES`]).
+    pub log: String,
+}
+
 /// Runs `command` in `dir` under `sandbox`, waiting at most [`BUILD_TIMEOUT`].
 ///
 /// # Errors
 /// [`BuildError`] when it cannot run, fails or takes too long.
 pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), BuildError> {
-    let words = shlex::split(command)
-        .filter(|w| !w.is_empty())
-        .ok_or_else(|| BuildError::BadCommand(command.to_string()))?;
-    let spawn_err = |source| BuildError::Spawn {
-        command: command.to_string(),
-        source,
-    };
-    let mut cmd = match sandbox {
-        Sandbox::None => {
-            let mut cmd = tokio::process::Command::new(&words[0]);
-            cmd.args(&words[1..]).current_dir(dir);
-            cmd
-        }
-        Sandbox::Full(full) => {
-            let args = super::sandbox::bwrap_args(full, Some(dir), BUILD_SCRATCH_BYTES, true)
-                .map_err(spawn_err)?;
-            let jail = jail::JailArgs {
-                nproc: (!full.as_root).then_some(BUILD_PROCESS_LIMIT),
-                command: words.iter().map(Into::into).collect(),
-                ..jail::JailArgs::default()
-            };
-            tokio::process::Command::from(full.command(args, &jail))
-        }
-    };
-    cmd.stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .process_group(0)
-        .kill_on_drop(true);
-    let child = cmd.spawn().map_err(spawn_err)?;
-    let pid = child.id();
-    let out = tokio::time::timeout(BUILD_TIMEOUT, child.wait_with_output()).await;
-    if let Some(pid) = pid {
-        super::sandbox::proctree::kill_tree(pid);
-        super::process::kill_group(pid);
+    let outcome = build_logged(command, dir, sandbox).await?;
+    if outcome.ok {
+        return Ok(());
     }
-    let (status, stderr) = match out {
-        Ok(Ok(o)) if o.status.success() => return Ok(()),
-        Ok(Ok(o)) => (o.status.to_string(), o.stderr),
-        Ok(Err(e)) => return Err(spawn_err(e)),
-        Err(_) => (
-            format!("took more than {} s", BUILD_TIMEOUT.as_secs()),
-            Vec::new(),
-        ),
-    };
-    let text = String::from_utf8_lossy(&stderr);
-    let tail: String = text
+    let tail: String = outcome
+        .log
         .chars()
         .rev()
         .take(2000)
@@ -103,11 +80,143 @@ pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), B
         .collect();
     Err(BuildError::Failed {
         command: command.to_string(),
-        status,
+        status: outcome.status,
         stderr: if tail.trim().is_empty() {
             String::new()
         } else {
             format!("\n{}", tail.trim_end())
         },
     })
+}
+
+/// Runs `command` in `dir` under `sandbox` with the build limits (time
+/// [`BUILD_TIMEOUT`], memory [`BUILD_MEMORY_BYTES`] where a cgroup can be made, output
+/// kept to its last [`BUILD_LOG_BYTES`]), and returns how it ended with its output.
+///
+/// # Errors
+/// [`BuildError`] only when it cannot be started at all.
+pub async fn build_logged(
+    command: &str,
+    dir: &Path,
+    sandbox: &Sandbox,
+) -> Result<BuildOutcome, BuildError> {
+    let words = shlex::split(command)
+        .filter(|w| !w.is_empty())
+        .ok_or_else(|| BuildError::BadCommand(command.to_string()))?;
+    let spawn_err = |source| BuildError::Spawn {
+        command: command.to_string(),
+        source,
+    };
+    let mut cgroup = None;
+    let mut cmd = match sandbox {
+        Sandbox::None => {
+            let mut cmd = tokio::process::Command::new(&words[0]);
+            cmd.args(&words[1..]).current_dir(dir);
+            cmd
+        }
+        Sandbox::Full(full) => {
+            let args = super::sandbox::bwrap_args(full, Some(dir), BUILD_SCRATCH_BYTES, true, &[])
+                .map_err(spawn_err)?;
+            if let Ok(root) = &full.cgroups {
+                cgroup = Some(
+                    root.create(super::sandbox::cgroup::CgroupLimits {
+                        memory_bytes: Some(BUILD_MEMORY_BYTES),
+                        pids: Some(BUILD_PROCESS_LIMIT),
+                    })
+                    .map_err(spawn_err)?,
+                );
+            }
+            let jail = jail::JailArgs {
+                nproc: (!full.as_root).then_some(BUILD_PROCESS_LIMIT),
+                command: words.iter().map(Into::into).collect(),
+                ..jail::JailArgs::default()
+            };
+            tokio::process::Command::from(full.command(args, &jail))
+        }
+    };
+    // One pipe for stdout and stderr, so the log keeps their order.
+    let (reader, writer) = std::io::pipe().map_err(spawn_err)?;
+    let writer2 = writer.try_clone().map_err(spawn_err)?;
+    cmd.stdin(std::process::Stdio::null())
+        .stdout(writer)
+        .stderr(writer2)
+        .process_group(0)
+        .kill_on_drop(true);
+    let join = cgroup
+        .as_ref()
+        .map(super::sandbox::cgroup::MatchCgroup::join_fds)
+        .unwrap_or_default();
+    // SAFETY: the closure runs in the child between fork and exec and only calls
+    // write(2) on fds opened before the fork (async-signal-safe, no allocation).
+    unsafe {
+        cmd.pre_exec(move || super::sandbox::cgroup::join_now(&join));
+    }
+    let mut child = cmd.spawn().map_err(spawn_err)?;
+    // Our copies of the pipe's write end went with `cmd`: drop it so the read ends.
+    drop(cmd);
+    let log = tokio::task::spawn_blocking(move || read_tail_blocking(reader, BUILD_LOG_BYTES));
+    let pid = child.id();
+    let waited = tokio::time::timeout(BUILD_TIMEOUT, child.wait()).await;
+    if let Some(pid) = pid {
+        super::sandbox::proctree::kill_tree(pid);
+        super::process::kill_group(pid);
+    }
+    let status = match &waited {
+        Ok(Ok(s)) => s.to_string(),
+        Ok(Err(e)) => format!("could not be waited for: {e}"),
+        Err(_) => {
+            let _ = child.kill().await;
+            format!("took more than {} s", BUILD_TIMEOUT.as_secs())
+        }
+    };
+    let ok = matches!(&waited, Ok(Ok(s)) if s.success());
+    let oom = cgroup
+        .as_ref()
+        .and_then(|c| c.limit_hit())
+        .is_some_and(|k| k == super::sandbox::cgroup::CgroupHit::Memory);
+    let mut log = tokio::time::timeout(std::time::Duration::from_secs(5), log)
+        .await
+        .ok()
+        .and_then(Result::ok)
+        .unwrap_or_else(|| "[the build's output could not be read to its end]".into());
+    if oom {
+        log.push_str(&format!(
+            "\n[the build went over its memory limit of {} MiB]",
+            BUILD_MEMORY_BYTES >> 20
+        ));
+    }
+    Ok(BuildOutcome {
+        ok: ok && !oom,
+        status,
+        log,
+    })
+}
+
+/// Reads `reader` to its end, keeping its last `cap` bytes as text.
+fn read_tail_blocking(mut reader: impl std::io::Read, cap: usize) -> String {
+    let mut tail: std::collections::VecDeque<u8> = std::collections::VecDeque::new();
+    let mut total = 0u64;
+    let mut buf = [0u8; 8192];
+    loop {
+        match reader.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => {
+                total += n as u64;
+                tail.extend(&buf[..n]);
+                if tail.len() > cap {
+                    let extra = tail.len() - cap;
+                    tail.drain(..extra);
+                }
+            }
+        }
+    }
+    let text = String::from_utf8_lossy(tail.make_contiguous()).into_owned();
+    if total > tail.len() as u64 {
+        format!(
+            "[... {} earlier bytes not kept]\n{text}",
+            total - tail.len() as u64
+        )
+    } else {
+        text
+    }
 }

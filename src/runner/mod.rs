@@ -7,12 +7,14 @@
 //! many can run at once in one process. This module is the only code that starts
 //! processes.
 
+pub mod botenv;
 pub mod build;
 pub mod framing;
 pub mod outcome;
 pub mod process;
 pub mod sandbox;
 pub mod session;
+pub mod trace;
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -46,13 +48,29 @@ pub const DEFAULT_SCRATCH_MB: u64 = 64;
 /// How long a bot may live after the end message before all its processes are killed.
 pub const EXIT_GRACE: Duration = Duration::from_secs(1);
 
-/// A bot to run: a command and the directory it runs in.
-#[derive(Debug, Clone)]
+/// A bot to run: a command, the directory it runs in, and the environment variables
+/// declared for it.
+#[derive(Debug, Clone, Default)]
 pub struct BotSpec {
     /// The command line, split like a shell (no shell is run), e.g. `python3 bot.py`.
     pub command: String,
     /// The bot's folder.
     pub dir: PathBuf,
+    /// Variables declared for the bot ([`botenv`]); it gets no other of ours.
+    pub env: Vec<(String, String)>,
+    /// Print the bot's stderr lines on ours as they come (`mazearena run --verbose`).
+    pub echo_stderr: bool,
+}
+
+impl BotSpec {
+    /// A bot with no declared variables.
+    pub fn new(command: impl Into<String>, dir: impl Into<PathBuf>) -> BotSpec {
+        BotSpec {
+            command: command.into(),
+            dir: dir.into(),
+            ..BotSpec::default()
+        }
+    }
 }
 
 /// The limits a match is played under.
@@ -128,8 +146,9 @@ pub async fn run_match(
         process_limit: limits.process_limit.map(u64::from),
         scratch_bytes: limits.scratch_mb << 20,
         sandbox,
+        env: &bot.env,
     };
-    let mut session = match Session::start(&launch, limits) {
+    let mut session = match Session::start(&launch, limits, bot.echo_stderr) {
         Ok(s) => s,
         Err(failure) => {
             record.error = Some(*failure);
@@ -147,20 +166,27 @@ pub async fn run_match(
         move_timeout_ms: limits.move_timeout.map_or(0, |d| d.as_millis() as u64),
     };
     let mut failure = session.greet(&start).await.err();
+    let mut debug_budget = trace::DebugBudget::default();
     while failure.is_none() {
         let Some(sense) = game.begin_step() else {
             break;
         };
+        if !record.trace.is_empty() {
+            stderr_to_last_step(&mut record, session.take_stderr_lines());
+        }
         match session.exchange(&sense).await {
             Verdict::Answer {
                 action,
                 answer_us,
                 cpu_us,
+                debug,
             } => {
                 let step = TraceStep {
                     report: game.apply(action),
                     answer_us,
                     cpu_us,
+                    stderr: Vec::new(),
+                    debug: debug_budget.admit(debug, sense.step, &mut record.notices),
                 };
                 observe(&step);
                 record.trace.push(step);
@@ -191,7 +217,8 @@ pub async fn run_match(
         run0_steps: record.run0_steps,
         run1_steps: record.run1_steps,
     };
-    let ended = session.finish(&end).await;
+    let mut ended = session.finish(&end).await;
+    stderr_to_last_step(&mut record, std::mem::take(&mut ended.late_stderr));
     if let Some((_, mut f)) = failure {
         (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);
         if let Some(reason) = setup_failure(&ended, sandbox) {
@@ -205,6 +232,18 @@ pub async fn run_match(
     record.stderr_tail = ended.stderr_tail;
     record.timings = timings(&record.trace, ended.cpu_ms, started);
     record
+}
+
+/// Gives the last played step the stderr lines written since it was asked (lines
+/// written before the first answer go to step 1; a match without steps keeps only the
+/// tail).
+fn stderr_to_last_step(record: &mut MatchRecord, lines: Vec<String>) {
+    if lines.is_empty() {
+        return;
+    }
+    if let Some(step) = record.trace.last_mut() {
+        trace::attach_stderr(step, lines, &mut record.notices);
+    }
 }
 
 /// The bot's exit code or signal. In the sandbox the process is bubblewrap, which exits
@@ -256,6 +295,8 @@ fn new_record(maze: &Maze, seed: u64, limits: &Limits, sandbox: &Sandbox) -> Mat
         stderr_tail: String::new(),
         timings: Timings::default(),
         bot_pid: None,
+        notices: Vec::new(),
+        maze_layout: None,
         trace: Vec::new(),
     }
 }

@@ -128,8 +128,9 @@ pub struct Timings {
     pub mean_answer_us: u64,
 }
 
-/// One step of the trace: the referee's report plus the bot's answer time.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+/// One step of the trace: the referee's report, the bot's answer time, and what the bot
+/// showed of its thinking (stderr lines, debug drawing).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TraceStep {
     /// What the step did.
     #[serde(flatten)]
@@ -141,6 +142,24 @@ pub struct TraceStep {
     /// answer, in microseconds, when it can be measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cpu_us: Option<u64>,
+    /// The bot's stderr lines that arrived while this step was asked and answered
+    /// (bounded: see [`crate::runner::framing::STDERR_STEP_LINES`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stderr: Vec<String>,
+    /// The answer's `debug` object (docs/PROTOCOL.md "Debug drawing"), as sent; the
+    /// referee never reads it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub debug: Option<serde_json::Value>,
+}
+
+/// A note from the runner about the record itself (not a rule warning), e.g. that the
+/// bot's debug output was cut to its limit.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Notice {
+    /// The step it concerns.
+    pub step: u32,
+    /// A sentence for people.
+    pub message: String,
 }
 
 /// Everything about one match: enough to show it, score it, and re-run it exactly.
@@ -179,6 +198,13 @@ pub struct MatchRecord {
     /// The bot's process id (also its process group id) while it ran.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bot_pid: Option<u32>,
+    /// Notes about the record: debug output or stderr lines that were cut.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notices: Vec<Notice>,
+    /// The maze's canonical numeric text, so that a replay file alone is enough to
+    /// watch the match (written by `mazearena run --replay`; the server keeps it apart).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub maze_layout: Option<String>,
     /// Every step, in order (left out of summaries).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub trace: Vec<TraceStep>,

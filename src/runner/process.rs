@@ -53,6 +53,8 @@ pub struct Launch<'a> {
     pub scratch_bytes: u64,
     /// The isolation.
     pub sandbox: &'a Sandbox,
+    /// Variables declared for the bot (checked by [`super::botenv::check`]).
+    pub env: &'a [(String, String)],
 }
 
 /// Why a bot could not be started.
@@ -127,13 +129,18 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 ),
                 Err(_) => None,
             };
-            let args =
-                super::sandbox::bwrap_args(full, Some(launch.dir), launch.scratch_bytes, false)
-                    .map_err(|e| LaunchError::Spawn {
-                        program: words[0].clone(),
-                        dir: launch.dir.display().to_string(),
-                        source: e,
-                    })?;
+            let args = super::sandbox::bwrap_args(
+                full,
+                Some(launch.dir),
+                launch.scratch_bytes,
+                false,
+                launch.env,
+            )
+            .map_err(|e| LaunchError::Spawn {
+                program: words[0].clone(),
+                dir: launch.dir.display().to_string(),
+                source: e,
+            })?;
             let jail = jail::JailArgs {
                 uid: uid.as_ref().map(UidLease::uid),
                 // With a cgroup, its count is the limit that is seen being hit; the
@@ -228,6 +235,7 @@ fn direct(launch: &Launch<'_>, words: &[String]) -> Command {
     }
     cmd.env("PYTHONUNBUFFERED", "1");
     cmd.env("PYTHONDONTWRITEBYTECODE", "1");
+    cmd.envs(launch.env.iter().map(|(k, v)| (k, v)));
     cmd
 }
 
@@ -331,6 +339,7 @@ mod tests {
             process_limit: None,
             scratch_bytes: 1 << 20,
             sandbox: &none,
+            env: &[],
         };
         for bad in ["", "   ", "python3 'unterminated"] {
             assert!(

@@ -21,6 +21,11 @@ use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
 /// How often the whole-match limits are looked at while the bot thinks.
 const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
 
+/// Added to a timeout at step 1: the usual cause is an answer left in an output buffer.
+pub const STARTUP_HINT: &str = " (if the bot did print an answer, it may still sit in its output buffer: \
+     flush stdout after every line, e.g. fflush(stdout) in C or print(..., flush=True) in Python; \
+     see docs/PROTOCOL.md \"Flush every line\")";
+
 /// What one step's exchange gave.
 #[derive(Debug)]
 pub enum Verdict {
@@ -32,6 +37,8 @@ pub enum Verdict {
         answer_us: u64,
         /// CPU time of every process of the bot over the step, in µs.
         cpu_us: Option<u64>,
+        /// The answer's `debug` field, as sent.
+        debug: Option<Box<serde_json::value::RawValue>>,
     },
     /// The bot failed: timeout, crash, protocol error or a limit.
     Fault(MatchStatus, Failure),
@@ -46,6 +53,8 @@ pub struct Ended {
     pub stderr_tail: String,
     /// CPU time of all its processes over the match, in ms.
     pub cpu_ms: Option<u64>,
+    /// Stderr lines not yet handed out by [`Session::take_stderr_lines`].
+    pub late_stderr: Vec<String>,
 }
 
 /// A running bot and its pipes.
@@ -54,6 +63,7 @@ pub struct Session {
     stdin: ChildStdin,
     replies: framing::ReplyReader<tokio::process::ChildStdout>,
     stderr: tokio::task::JoinHandle<String>,
+    stderr_lines: tokio::sync::mpsc::UnboundedReceiver<String>,
     started: Instant,
     limits: Limits,
     cpu_mark: Option<u64>,
@@ -65,7 +75,12 @@ impl Session {
     ///
     /// # Errors
     /// The failure to record when it cannot be started or refuses the start message.
-    pub fn start(launch: &process::Launch<'_>, limits: Limits) -> Result<Session, Box<Failure>> {
+    /// With `echo_stderr`, the bot's stderr lines are also printed on ours as they come.
+    pub fn start(
+        launch: &process::Launch<'_>,
+        limits: Limits,
+        echo_stderr: bool,
+    ) -> Result<Session, Box<Failure>> {
         let started = Instant::now();
         let mut process = process::spawn(launch).map_err(|e| {
             Box::new(Failure {
@@ -91,8 +106,18 @@ impl Session {
             .expect("stderr is piped by process::spawn");
         let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let (lines, stderr_lines) = tokio::sync::mpsc::unbounded_channel();
+        let lines = framing::StderrLines {
+            trace: lines,
+            echo: echo_stderr,
+        };
         Ok(Session {
-            stderr: tokio::spawn(framing::read_tail(stderr, framing::STDERR_TAIL_BYTES)),
+            stderr: tokio::spawn(framing::read_stderr(
+                stderr,
+                framing::STDERR_TAIL_BYTES,
+                lines,
+            )),
+            stderr_lines,
             replies: framing::reply_reader(stdout),
             stdin,
             started,
@@ -106,6 +131,16 @@ impl Session {
     /// The bot's pid (its process group id).
     pub fn pid(&self) -> Option<u32> {
         self.process.pid
+    }
+
+    /// The bot's stderr lines that have arrived since the last call (bounded in total by
+    /// [`framing::STDERR_TRACE_BYTES`]).
+    pub fn take_stderr_lines(&mut self) -> Vec<String> {
+        let mut lines = Vec::new();
+        while let Ok(line) = self.stderr_lines.try_recv() {
+            lines.push(line);
+        }
+        lines
     }
 
     /// Sends `message` within the startup limit (the start message).
@@ -154,10 +189,13 @@ impl Session {
             Err(_) => {
                 let what = if sense.step == 1 { "startup" } else { "move" };
                 let ms = limit.map_or(0, |l| l.as_millis());
-                let reason = format!(
+                let mut reason = format!(
                     "no answer to step {} within the {what} limit of {ms} ms",
                     sense.step
                 );
+                if sense.step == 1 {
+                    reason.push_str(STARTUP_HINT);
+                }
                 return self.fault_or_limit(MatchStatus::Timeout, reason, sense.step);
             }
             Ok(None) => {
@@ -184,11 +222,12 @@ impl Session {
             _ => None,
         };
         self.cpu_mark = cpu_now;
-        match crate::protocol::decode_reply(&line) {
-            Ok(action) => Verdict::Answer {
-                action,
+        match crate::protocol::decode_answer(&line) {
+            Ok(answer) => Verdict::Answer {
+                action: answer.action,
                 answer_us,
                 cpu_us,
+                debug: answer.debug,
             },
             Err(e) => protocol_fault(e, &line, sense.step),
         }
@@ -246,10 +285,15 @@ impl Session {
             Ok(Ok(tail)) => tail,
             _ => String::from("[stderr could not be read to its end]"),
         };
+        let mut late_stderr = Vec::new();
+        while let Ok(line) = self.stderr_lines.try_recv() {
+            late_stderr.push(line);
+        }
         Ended {
             exit,
             stderr_tail,
             cpu_ms: cpu_us.map(|us| us / 1000),
+            late_stderr,
         }
     }
 }

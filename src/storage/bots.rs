@@ -27,6 +27,8 @@ pub struct BotRow {
     pub paused_reason: Option<String>,
     /// When it was paused (unix ms).
     pub paused_at: Option<i64>,
+    /// The latest version's build status: `ready`, `building` or `build_failed`.
+    pub build_status: String,
 }
 
 impl BotRow {
@@ -55,6 +57,49 @@ pub struct BotVersionRow {
     pub file_count: i64,
     /// When it was stored (unix ms).
     pub created_at: i64,
+    /// The build command run once before it plays, if any.
+    pub build_command: Option<String>,
+    /// `ready` (plays), `building`, or `build_failed` (never plays).
+    pub build_status: String,
+    /// The end of the build's output.
+    pub build_log: Option<String>,
+    /// When its build ended (unix ms).
+    pub built_at: Option<i64>,
+    /// Environment variables declared for the bot: a JSON object of strings.
+    pub env: String,
+}
+
+impl BotVersionRow {
+    /// The declared environment variables as pairs (an unreadable value: none).
+    pub fn env_pairs(&self) -> Vec<(String, String)> {
+        env_pairs(&self.env)
+    }
+}
+
+/// Environment pairs from their stored JSON object (anything else: none).
+pub fn env_pairs(json: &str) -> Vec<(String, String)> {
+    serde_json::from_str::<std::collections::BTreeMap<String, String>>(json)
+        .map(|m| m.into_iter().collect())
+        .unwrap_or_default()
+}
+
+/// Stored JSON of environment pairs.
+pub fn env_json(pairs: &[(String, String)]) -> String {
+    let map: std::collections::BTreeMap<&str, &str> = pairs
+        .iter()
+        .map(|(k, v)| (k.as_str(), v.as_str()))
+        .collect();
+    serde_json::to_string(&map).unwrap_or_else(|_| "{}".into())
+}
+
+/// A version's build status.
+pub mod build_status {
+    /// Plays.
+    pub const READY: &str = "ready";
+    /// Waits for, or is in, its build.
+    pub const BUILDING: &str = "building";
+    /// Its build failed: it never plays.
+    pub const FAILED: &str = "build_failed";
 }
 
 /// A new version's details.
@@ -68,11 +113,15 @@ pub struct NewVersion<'a> {
     pub files_sha256: &'a str,
     /// Number of files.
     pub file_count: i64,
+    /// A build command: the version is `building` until it has run.
+    pub build_command: Option<&'a str>,
+    /// Declared environment variables (checked by `runner::botenv::check`).
+    pub env: &'a [(String, String)],
 }
 
 const BOT_WITH_LATEST: &str =
     "select b.bot_id, b.name, b.created_at, v.version, v.bot_version_id, v.command,
-         b.paused_reason, b.paused_at
+         b.paused_reason, b.paused_at, v.build_status
      from bot b join bot_version v on v.bot_id = b.bot_id
      where v.version = (select max(version) from bot_version where bot_id = b.bot_id)";
 
@@ -281,9 +330,16 @@ async fn insert_version(
     bot_id: i64,
     new: &NewVersion<'_>,
 ) -> Result<BotVersionRow> {
+    let status = if new.build_command.is_some() {
+        build_status::BUILDING
+    } else {
+        build_status::READY
+    };
     Ok(sqlx::query_as(
-        "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at)
-         values (?, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = ?), ?, ?, ?, ?, ?)
+        "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at,
+             build_command, build_status, env)
+         values (?, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = ?), ?, ?, ?, ?, ?,
+             ?, ?, ?)
          returning *",
     )
     .bind(bot_id)
@@ -293,6 +349,9 @@ async fn insert_version(
     .bind(new.files_sha256)
     .bind(new.file_count)
     .bind(now_ms())
+    .bind(new.build_command)
+    .bind(status)
+    .bind(env_json(new.env))
     .fetch_one(tx)
     .await?)
 }
@@ -308,6 +367,8 @@ mod tests {
             dir: "/bots/x",
             files_sha256: "abc",
             file_count: 1,
+            build_command: None,
+            env: &[],
         }
     }
 

@@ -74,6 +74,30 @@ pub struct ClaimedMatch {
     pub layout: String,
     /// The tournament, if any.
     pub tournament_id: Option<i64>,
+    /// Environment variables declared for the bot version (JSON object).
+    pub env: String,
+}
+
+/// Which matches [`Storage::list_matches`] returns.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct MatchFilter {
+    /// Only this bot's (any version).
+    pub bot_id: Option<i64>,
+    /// Only this tournament's.
+    pub tournament_id: Option<i64>,
+    /// Only this maze's.
+    pub maze_id: Option<i64>,
+    /// Only matches in this status.
+    pub status: Option<String>,
+}
+
+/// One page of a list: at most `limit` rows after skipping `offset`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Page {
+    /// Rows to skip.
+    pub offset: i64,
+    /// Rows to return.
+    pub limit: i64,
 }
 
 const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, v.version, m.maze_id,
@@ -133,7 +157,7 @@ impl Storage {
                  select m.match_id from match m
                  join bot_version v on v.bot_version_id = m.bot_version_id
                  join bot b on b.bot_id = v.bot_id
-                 where m.status = 'queued' and b.paused_at is null
+                 where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready'
                      and (? is null or m.tournament_id = ?)
                  order by m.priority, m.match_id limit 1)
              returning match_id",
@@ -147,7 +171,7 @@ impl Storage {
         .await?;
         let Some(id) = id else { return Ok(None) };
         Ok(sqlx::query_as(
-            "select m.match_id, m.seed, v.command, v.dir, z.layout, m.tournament_id
+            "select m.match_id, m.seed, v.command, v.dir, z.layout, m.tournament_id, v.env
              from match m join bot_version v on v.bot_version_id = m.bot_version_id
              join maze z on z.maze_id = m.maze_id where m.match_id = ?",
         )
@@ -283,6 +307,41 @@ impl Storage {
                 .await?
                 .flatten(),
         )
+    }
+
+    /// One page of the matches that pass `filter`, newest first, and how many pass it.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn list_matches(
+        &self,
+        filter: &MatchFilter,
+        page: Page,
+    ) -> Result<(Vec<MatchRow>, i64)> {
+        const WHERE: &str =
+            "where (?1 is null or v.bot_id = ?1) and (?2 is null or m.tournament_id = ?2)
+                 and (?3 is null or m.maze_id = ?3) and (?4 is null or m.status = ?4)";
+        let rows = sqlx::query_as(&format!(
+            "{MATCH_SELECT} {WHERE} order by m.match_id desc limit ?5 offset ?6"
+        ))
+        .bind(filter.bot_id)
+        .bind(filter.tournament_id)
+        .bind(filter.maze_id)
+        .bind(filter.status.as_deref())
+        .bind(page.limit)
+        .bind(page.offset)
+        .fetch_all(self.pool())
+        .await?;
+        let total: i64 = sqlx::query_scalar(&format!(
+            "select count(*) from match m join bot_version v on v.bot_version_id = m.bot_version_id {WHERE}"
+        ))
+        .bind(filter.bot_id)
+        .bind(filter.tournament_id)
+        .bind(filter.maze_id)
+        .bind(filter.status.as_deref())
+        .fetch_one(self.pool())
+        .await?;
+        Ok((rows, total))
     }
 
     /// Matches of a tournament, by id.

@@ -6,6 +6,7 @@
 //! (PostgreSQL, for workers on several machines) can be added behind the same calls.
 
 pub mod bots;
+pub mod builds;
 pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
@@ -134,6 +135,8 @@ pub(crate) mod test_support {
                     dir: "/x",
                     files_sha256: "s",
                     file_count: 1,
+                    build_command: None,
+                    env: &[],
                 },
             )
             .await

@@ -254,6 +254,8 @@ mod tests {
                     dir: "/o",
                     files_sha256: "o",
                     file_count: 1,
+                    build_command: None,
+                    env: &[],
                 },
             )
             .await
@@ -273,6 +275,8 @@ mod tests {
             dir: "/y",
             files_sha256: "t",
             file_count: 1,
+            build_command: None,
+            env: &[],
         };
         db.add_bot_version(bot_id, &v2).await.unwrap();
         let bot = db.get_bot(bot_id).await.unwrap().unwrap();

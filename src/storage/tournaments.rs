@@ -2,7 +2,7 @@
 
 use sqlx::FromRow;
 
-use super::matches::PRIORITY_TOURNAMENT;
+use super::matches::{PRIORITY_TOURNAMENT, Page};
 use super::{Result, Storage, now_ms};
 
 /// A stored tournament with its progress.
@@ -21,6 +21,12 @@ pub struct TournamentRow {
     /// Matches played (any final status).
     pub done: i64,
 }
+
+const TOURNAMENT_SELECT: &str = "select t.tournament_id, t.name, t.repeats, t.created_at,
+         (select count(*) from match where tournament_id = t.tournament_id) as total,
+         (select count(*) from match where tournament_id = t.tournament_id
+             and status not in ('queued', 'running')) as done
+     from tournament t";
 
 impl Storage {
     /// Creates a tournament and queues all its matches, in one transaction. Repeat `r`
@@ -77,15 +83,29 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn get_tournament(&self, tournament_id: i64) -> Result<Option<TournamentRow>> {
-        Ok(sqlx::query_as(
-            "select t.tournament_id, t.name, t.repeats, t.created_at,
-                 (select count(*) from match where tournament_id = t.tournament_id) as total,
-                 (select count(*) from match where tournament_id = t.tournament_id
-                     and status not in ('queued', 'running')) as done
-             from tournament t where t.tournament_id = ?",
+        Ok(
+            sqlx::query_as(&format!("{TOURNAMENT_SELECT} where t.tournament_id = ?"))
+                .bind(tournament_id)
+                .fetch_optional(self.pool())
+                .await?,
         )
-        .bind(tournament_id)
-        .fetch_optional(self.pool())
-        .await?)
+    }
+
+    /// One page of tournaments, newest first, and how many there are.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn list_tournaments(&self, page: Page) -> Result<(Vec<TournamentRow>, i64)> {
+        let rows = sqlx::query_as(&format!(
+            "{TOURNAMENT_SELECT} order by t.tournament_id desc limit ? offset ?"
+        ))
+        .bind(page.limit)
+        .bind(page.offset)
+        .fetch_all(self.pool())
+        .await?;
+        let total = sqlx::query_scalar("select count(*) from tournament")
+            .fetch_one(self.pool())
+            .await?;
+        Ok((rows, total))
     }
 }

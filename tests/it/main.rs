@@ -2,9 +2,11 @@
 
 mod api;
 mod bots;
+mod browser;
 mod cli;
 mod hostile;
 mod mazefiles;
 mod referee;
 mod runner;
 mod support;
+mod web;

@@ -193,10 +193,7 @@ async fn a_stderr_flood_is_kept_to_a_bounded_tail() {
 
 #[tokio::test]
 async fn a_command_that_cannot_start_has_crashed() {
-    let bot = BotSpec {
-        command: "./no-such-bot --fast".into(),
-        dir: root().to_path_buf(),
-    };
+    let bot = BotSpec::new("./no-such-bot --fast", root());
     let r = run_match(&bot, &classic(1), 0, limits(), &sandbox(), |_| {}).await;
     assert_eq!(r.status, MatchStatus::Crashed);
     assert!(reason(&r).contains("could not start"), "{}", reason(&r));

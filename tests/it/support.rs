@@ -38,10 +38,7 @@ pub fn fixture_bot(name: &str, args: &[&str]) -> BotSpec {
         command.push(' ');
         command.push_str(&shlex::try_quote(a).unwrap());
     }
-    BotSpec {
-        command,
-        dir: root().to_path_buf(),
-    }
+    BotSpec::new(command, root())
 }
 
 /// The sandbox bots run under in the tests: the full one where it works. In CI

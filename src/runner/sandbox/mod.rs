@@ -156,8 +156,8 @@ impl Sandbox {
             return Err(Unavailable("no sandbox".into()));
         };
         let lease = full.as_root.then(UidLease::take);
-        let args =
-            view::bwrap_args(full, None, 1 << 20, false).map_err(|e| Unavailable(e.to_string()))?;
+        let args = view::bwrap_args(full, None, 1 << 20, false, &[])
+            .map_err(|e| Unavailable(e.to_string()))?;
         let jail = jail::JailArgs {
             uid: lease.as_ref().map(UidLease::uid),
             nproc: Some(16),

@@ -125,6 +125,7 @@ pub fn bwrap_args(
     bot_dir: Option<&Path>,
     scratch_bytes: u64,
     writable: bool,
+    extra_env: &[(String, String)],
 ) -> std::io::Result<Vec<OsString>> {
     let mut a: Vec<OsString> = Vec::new();
     let mut push = |items: &[&dyn AsRef<std::ffi::OsStr>]| {
@@ -227,7 +228,7 @@ pub fn bwrap_args(
         }
     }
     push(&[&"--clearenv"]);
-    for (k, v) in &full.env {
+    for (k, v) in full.env.iter().chain(extra_env) {
         push(&[&"--setenv", k, v]);
     }
     push(&[&"--chdir", &work, &"--", &HELPER_IN_SANDBOX]);

@@ -1,22 +1,22 @@
 //! Bots: register (with files), upload new versions (which resumes a paused bot), list,
 //! show, and resume a paused bot (admin).
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+mod upload;
 
-use axum::extract::{DefaultBodyLimit, FromRequest, Multipart, Request, State};
-use axum::http::{StatusCode, header};
-use base64::Engine;
+use std::collections::BTreeMap;
+
+use axum::extract::{DefaultBodyLimit, Request, State};
+use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 use super::auth::{Caller, hash_token, new_token};
-use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
+use super::error::{ApiError, ApiResult, AppPath, ErrorBody};
 use super::{AppState, MAX_UPLOAD_BYTES};
-use crate::botfiles::{self, BundleError, BundleLimits, BundleSummary};
 use crate::storage::bots::{BotVersionRow, NewVersion};
+use upload::{check_name, read_upload, remove_dir, store_files};
 
 /// Longest bot name.
 pub const MAX_NAME_CHARS: usize = 64;
@@ -29,6 +29,7 @@ pub(super) fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(get_bot))
         .routes(routes!(create_bot_version))
         .routes(routes!(resume_bot))
+        .routes(routes!(get_build_log))
         .layer(DefaultBodyLimit::max(MAX_UPLOAD_BYTES))
 }
 
@@ -49,6 +50,14 @@ pub struct BotUpload {
     /// An archive of the bot's directory, base64-encoded.
     #[serde(default)]
     pub archive_base64: Option<String>,
+    /// A build command (e.g. `make`, `cargo build --release --offline`) that the server
+    /// runs once in the sandbox (no network) before the version plays. (Form: `build`.)
+    #[serde(default)]
+    pub build: Option<String>,
+    /// Environment variables for the bot: names `[A-Za-z_][A-Za-z0-9_]*`, not PATH, HOME,
+    /// TMPDIR or `MAZEARENA_*`. (Form: repeated `env` fields `KEY=VALUE`.)
+    #[serde(default)]
+    pub env: Option<BTreeMap<String, String>>,
 }
 
 /// A stored version of a bot.
@@ -66,19 +75,61 @@ pub struct VersionView {
     pub file_count: i64,
     /// When it was uploaded (unix ms).
     pub created_at: i64,
+    /// The build command run once before it plays, if any.
+    pub build_command: Option<String>,
+    /// `ready` (plays), `building` (waiting for or in its build) or `build_failed`
+    /// (never plays; its matches are recorded as crashed).
+    pub build_status: String,
+    /// When the build ended (unix ms).
+    pub built_at: Option<i64>,
+    /// The end of the build's output (owner and admin only; the whole log is at
+    /// `GET /api/bots/{id}/versions/{version}/build-log`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub build_log_tail: Option<String>,
+    /// The names of the environment variables declared for the bot (values are shown
+    /// to nobody).
+    pub env_names: Vec<String>,
 }
+
+/// Lines of a build log shown in a version's view.
+const BUILD_LOG_TAIL_LINES: usize = 20;
 
 impl From<BotVersionRow> for VersionView {
     fn from(v: BotVersionRow) -> Self {
         VersionView {
             version: v.version,
             bot_version_id: v.bot_version_id,
+            env_names: v.env_pairs().into_iter().map(|(k, _)| k).collect(),
             command: v.command,
             files_sha256: v.files_sha256,
             file_count: v.file_count,
             created_at: v.created_at,
+            build_command: v.build_command,
+            build_status: v.build_status,
+            built_at: v.built_at,
+            build_log_tail: None,
         }
     }
+}
+
+/// A version's build log (owner and admin).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct BuildLogView {
+    /// The version number.
+    pub version: i64,
+    /// The build command.
+    pub build_command: Option<String>,
+    /// `ready`, `building` or `build_failed`.
+    pub build_status: String,
+    /// When the build ended (unix ms).
+    pub built_at: Option<i64>,
+    /// The build's output (stdout and stderr, its last 64 KiB); null before it ran.
+    pub build_log: Option<String>,
+}
+
+fn log_tail(log: &str) -> String {
+    let lines: Vec<&str> = log.lines().collect();
+    lines[lines.len().saturating_sub(BUILD_LOG_TAIL_LINES)..].join("\n")
 }
 
 /// The answer to a registration: the owner token is shown this once.
@@ -109,6 +160,8 @@ pub struct BotView {
     pub created_at: i64,
     /// Paused: its matches keep aborting, so no new ones are accepted.
     pub paused: bool,
+    /// The latest version's build status: `ready`, `building` or `build_failed`.
+    pub build_status: String,
 }
 
 /// A bot with all its versions.
@@ -153,7 +206,6 @@ async fn create_bot(
         .clone()
         .ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
     check_name(&name)?;
-    check_command(&upload.command)?;
     if state.storage.get_bot_by_name(&name).await?.is_some() {
         return Err(ApiError::Conflict(format!(
             "a bot named {name:?} exists already"
@@ -167,13 +219,18 @@ async fn create_bot(
         dir: &dir.display().to_string(),
         files_sha256: &summary.sha256,
         file_count: summary.files as i64,
+        build_command: upload.build.as_deref(),
+        env: &upload.env,
     };
     let row = match state
         .storage
         .create_bot(&name, &hash_token(&token), &new)
         .await
     {
-        Ok(row) => row,
+        Ok(row) => {
+            state.wake.notify_waiters();
+            row
+        }
         Err(e) => {
             remove_dir(&dir).await;
             return Err(e.into());
@@ -214,7 +271,6 @@ async fn create_bot_version(
     }
     caller.require_owner(&state, id).await?;
     let upload = read_upload(&state, request).await?;
-    check_command(&upload.command)?;
     let (dir, summary) =
         store_files(&state.settings.data_dir, upload.files, upload.archive).await?;
     let new = NewVersion {
@@ -222,9 +278,14 @@ async fn create_bot_version(
         dir: &dir.display().to_string(),
         files_sha256: &summary.sha256,
         file_count: summary.files as i64,
+        build_command: upload.build.as_deref(),
+        env: &upload.env,
     };
     match state.storage.add_bot_version(id, &new).await {
-        Ok(row) => Ok((StatusCode::CREATED, axum::Json(row.into()))),
+        Ok(row) => {
+            state.wake.notify_waiters();
+            Ok((StatusCode::CREATED, axum::Json(row.into())))
+        }
         Err(e) => {
             remove_dir(&dir).await;
             Err(e.into())
@@ -241,6 +302,7 @@ async fn list_bots(State(state): State<AppState>) -> ApiResult<axum::Json<Vec<Bo
         bots.into_iter()
             .map(|b| BotView {
                 paused: b.is_paused(),
+                build_status: b.build_status,
                 bot_id: b.bot_id,
                 name: b.name,
                 version: b.version,
@@ -257,9 +319,50 @@ async fn list_bots(State(state): State<AppState>) -> ApiResult<axum::Json<Vec<Bo
     responses((status = 200, body = BotDetail), (status = 404, body = ErrorBody)))]
 async fn get_bot(
     State(state): State<AppState>,
+    caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<BotDetail>> {
-    Ok(axum::Json(bot_detail(&state, id).await?))
+    let mut detail = bot_detail(&state, id).await?;
+    if caller.owns(&state, id).await? {
+        let versions = state.storage.bot_versions(id).await?;
+        for (view, row) in detail.versions.iter_mut().zip(versions) {
+            view.build_log_tail = row.build_log.as_deref().map(log_tail);
+        }
+    }
+    Ok(axum::Json(detail))
+}
+
+/// A version's whole build log (owner token or admin).
+#[utoipa::path(get, path = "/api/bots/{id}/versions/{version}/build-log", tag = "bots",
+    params(("id" = i64, Path, description = "bot id"), ("version" = i64, Path, description = "version number")),
+    security(("bearer" = [])),
+    responses(
+        (status = 200, body = BuildLogView),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody), (status = 404, body = ErrorBody),
+    ))]
+async fn get_build_log(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath((id, version)): AppPath<(i64, i64)>,
+) -> ApiResult<axum::Json<BuildLogView>> {
+    if state.storage.get_bot(id).await?.is_none() {
+        return Err(ApiError::NotFound(format!("no bot {id}")));
+    }
+    caller.require_owner(&state, id).await?;
+    let v = state
+        .storage
+        .bot_versions(id)
+        .await?
+        .into_iter()
+        .find(|v| v.version == version)
+        .ok_or_else(|| ApiError::NotFound(format!("bot {id} has no version {version}")))?;
+    Ok(axum::Json(BuildLogView {
+        version: v.version,
+        build_command: v.build_command,
+        build_status: v.build_status,
+        built_at: v.built_at,
+        build_log: v.build_log,
+    }))
 }
 
 /// Resume a paused bot (admin token): its matches are accepted and played again.
@@ -304,163 +407,4 @@ async fn bot_detail(state: &AppState, id: i64) -> ApiResult<BotDetail> {
         paused_at: bot.paused_at,
         versions: versions.into_iter().map(Into::into).collect(),
     })
-}
-
-/// An upload, whichever way it came.
-struct Upload {
-    name: Option<String>,
-    command: String,
-    files: Option<BTreeMap<String, String>>,
-    archive: Option<Vec<u8>>,
-}
-
-async fn read_upload(state: &AppState, request: Request) -> ApiResult<Upload> {
-    // Refuse a declared oversized upload before reading any of it.
-    let declared = request
-        .headers()
-        .get(header::CONTENT_LENGTH)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.parse::<u64>().ok());
-    if declared.is_some_and(|n| n > MAX_UPLOAD_BYTES as u64) {
-        return Err(ApiError::PayloadTooLarge(format!(
-            "the upload is larger than {MAX_UPLOAD_BYTES} bytes; bots are limited to 50 MiB unpacked \
-             and uploads to {MAX_UPLOAD_BYTES} bytes"
-        )));
-    }
-    let content_type = request
-        .headers()
-        .get(header::CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if content_type.starts_with("multipart/form-data") {
-        let mut form = Multipart::from_request(request, state).await?;
-        let (mut name, mut command, mut archive) = (None, None, None);
-        while let Some(field) = form.next_field().await? {
-            match field.name().unwrap_or("") {
-                "name" => name = Some(field.text().await?),
-                "command" => command = Some(field.text().await?),
-                "archive" => archive = Some(field.bytes().await?.to_vec()),
-                other => {
-                    return Err(ApiError::BadRequest(format!(
-                        "unknown form field {other:?}: expected name, command, archive"
-                    )));
-                }
-            }
-        }
-        return Ok(Upload {
-            name,
-            command: command.ok_or_else(|| {
-                ApiError::Unprocessable("the form needs a `command` field".into())
-            })?,
-            files: None,
-            archive: Some(archive.ok_or_else(|| {
-                ApiError::Unprocessable("the form needs an `archive` file field".into())
-            })?),
-        });
-    }
-    let AppJson(body) = AppJson::<BotUpload>::from_request(request, state).await?;
-    let archive = match body.archive_base64 {
-        Some(text) => Some(
-            base64::engine::general_purpose::STANDARD
-                .decode(text.trim())
-                .map_err(|e| {
-                    ApiError::Unprocessable(format!("`archive_base64` is not valid base64: {e}"))
-                })?,
-        ),
-        None => None,
-    };
-    Ok(Upload {
-        name: body.name,
-        command: body.command,
-        files: body.files,
-        archive,
-    })
-}
-
-fn check_name(name: &str) -> ApiResult<()> {
-    let ok = !name.is_empty()
-        && name.chars().count() <= MAX_NAME_CHARS
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
-    if ok {
-        Ok(())
-    } else {
-        Err(ApiError::Unprocessable(format!(
-            "bot name {name:?} is not allowed: 1 to {MAX_NAME_CHARS} letters, digits, '-', '_' or '.'"
-        )))
-    }
-}
-
-fn check_command(command: &str) -> ApiResult<()> {
-    if command.chars().count() > MAX_COMMAND_CHARS {
-        return Err(ApiError::Unprocessable(format!(
-            "the command is longer than {MAX_COMMAND_CHARS} characters"
-        )));
-    }
-    match shlex::split(command) {
-        Some(words) if !words.is_empty() => Ok(()),
-        _ => Err(ApiError::Unprocessable(format!(
-            "the command {command:?} is empty or has unbalanced quotes"
-        ))),
-    }
-}
-
-/// Unpacks the files into a new directory under `data_dir/bots`.
-async fn store_files(
-    data_dir: &Path,
-    files: Option<BTreeMap<String, String>>,
-    archive: Option<Vec<u8>>,
-) -> ApiResult<(PathBuf, BundleSummary)> {
-    let dir = data_dir
-        .join("bots")
-        .join(new_token()?.get(..24).unwrap_or("bot"));
-    tokio::fs::create_dir_all(&dir)
-        .await
-        .map_err(|e| ApiError::Internal(format!("cannot create {}: {e}", dir.display())))?;
-    let dest = dir.clone();
-    let result = tokio::task::spawn_blocking(move || {
-        let limits = BundleLimits::default();
-        match (files, archive) {
-            (Some(_), Some(_)) => Err(ApiError::Unprocessable(
-                "send the files either as `files` or as `archive_base64`, not both".into(),
-            )),
-            (None, None) => Err(ApiError::Unprocessable(
-                "the bot has no files: send `files` or `archive_base64`".into(),
-            )),
-            (Some(map), None) => botfiles::write_files(&map, &dest, &limits).map_err(bundle_error),
-            (None, Some(bytes)) => {
-                botfiles::unpack_archive(&bytes, &dest, &limits).map_err(bundle_error)
-            }
-        }
-    })
-    .await
-    .map_err(|e| ApiError::Internal(format!("unpacking task failed: {e}")))?;
-    match result {
-        Ok(summary) => Ok((dir, summary)),
-        Err(e) => {
-            remove_dir(&dir).await;
-            Err(e)
-        }
-    }
-}
-
-fn bundle_error(e: BundleError) -> ApiError {
-    if matches!(
-        e,
-        BundleError::TooLarge { .. } | BundleError::TooManyFiles { .. }
-    ) {
-        ApiError::PayloadTooLarge(e.to_string())
-    } else if e.is_client_error() {
-        ApiError::Unprocessable(e.to_string())
-    } else {
-        ApiError::Internal(e.to_string())
-    }
-}
-
-async fn remove_dir(dir: &Path) {
-    if let Err(e) = tokio::fs::remove_dir_all(dir).await {
-        tracing::warn!(cause = %e, dir = %dir.display(), "could not remove a bot directory");
-    }
 }

@@ -1,0 +1,500 @@
+//! The server's web pages (HTML): thin handlers that fetch what a page shows, apply the
+//! hidden-maze rules for an anonymous visitor (pages never use a token: a hidden maze's
+//! layout, replay and failure text never appear in a page), and call `web::pages`.
+//! Bad ids and query strings get the API's JSON errors.
+
+use std::collections::BTreeMap;
+
+use axum::Router;
+use axum::extract::State;
+use axum::response::Html;
+use axum::routing::get;
+use serde::Deserialize;
+
+use super::AppState;
+use super::auth::Caller;
+use super::error::{ApiError, ApiResult, AppPath, AppQuery};
+use super::leaderboard::for_caller;
+use super::matches::{MatchListQuery, page, parse_record};
+use crate::engine::{mazefile, render, solver};
+use crate::runner::MatchRecord;
+use crate::storage::leaderboard::{Scope, Standing};
+use crate::storage::matches::{MatchFilter, MatchRow, Page};
+use crate::web::pages::{self as web, MatchLine, Pager, SortKey, StandingsSection};
+use crate::web::viewer::ViewerData;
+
+/// How many tournaments the leaderboard lists, and recent matches a bot or maze page.
+const RECENT: i64 = 20;
+
+/// The page routes.
+pub(super) fn router() -> Router<AppState> {
+    Router::new()
+        .route("/", get(leaderboard_page))
+        .route("/bots", get(bots_page))
+        .route("/bots/{id}", get(bot_page))
+        .route("/mazes", get(mazes_page))
+        .route("/mazes/{id}", get(maze_page))
+        .route("/matches", get(matches_page))
+        .route("/matches/{id}", get(match_page))
+        .route("/tournaments", get(tournaments_page))
+        .route("/tournaments/{id}", get(tournament_page))
+}
+
+/// Query of `/`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoardQuery {
+    scope: Option<String>,
+    tournament: Option<i64>,
+    sort: Option<String>,
+}
+
+async fn leaderboard_page(
+    State(state): State<AppState>,
+    AppQuery(q): AppQuery<BoardQuery>,
+) -> ApiResult<Html<String>> {
+    let sort = match q.sort.as_deref() {
+        None => SortKey::Rank,
+        Some(s) => SortKey::parse(s).ok_or_else(|| {
+            ApiError::BadRequest(format!(
+                "unknown sort {s:?}: use rank, name, finish_rate, efficiency or played"
+            ))
+        })?,
+    };
+    let mazes = state.storage.list_mazes().await?;
+    let hidden = mazes.iter().filter(|m| m.hidden).count();
+    let (tournaments, _) = state
+        .storage
+        .list_tournaments(Page {
+            offset: 0,
+            limit: RECENT,
+        })
+        .await?;
+    let storage = &state.storage;
+    let board = |scope| async move {
+        Ok::<_, ApiError>(for_caller(
+            storage.leaderboard(scope).await?,
+            &Caller::Anonymous,
+        ))
+    };
+    let (scope, rows) = match (q.tournament, q.scope.as_deref()) {
+        (Some(_), Some(_)) => {
+            return Err(ApiError::BadRequest(
+                "give either `tournament` or `scope`, not both".into(),
+            ));
+        }
+        (Some(id), None) => {
+            if state.storage.get_tournament(id).await?.is_none() {
+                return Err(ApiError::NotFound(format!("no tournament {id}")));
+            }
+            (Scope::Tournament(id), board(Scope::Tournament(id)).await?)
+        }
+        (None, Some("ranking")) => (Scope::Ranking, board(Scope::Ranking).await?),
+        (None, Some("all")) => (Scope::All, board(Scope::All).await?),
+        (None, Some(other)) => {
+            return Err(ApiError::BadRequest(format!(
+                "unknown scope {other:?}: use `ranking` or `all`"
+            )));
+        }
+        // The default: the ranking once hidden mazes have been played on, else every maze.
+        (None, None) => {
+            let ranking = if hidden > 0 {
+                board(Scope::Ranking).await?
+            } else {
+                Vec::new()
+            };
+            if ranking.is_empty() {
+                (Scope::All, board(Scope::All).await?)
+            } else {
+                (Scope::Ranking, ranking)
+            }
+        }
+    };
+    let (heading, note, query) = match scope {
+        Scope::Ranking => (
+            "Ranking".to_string(),
+            format!(
+                "Each bot's latest version on the {hidden} hidden ranking maze(s). Mean score: run-1 steps + run-0 steps / 30, a match that did not finish counts as 1000; lower is better."
+            ),
+            "scope=ranking".to_string(),
+        ),
+        Scope::All => (
+            "Standings over all mazes".to_string(),
+            if hidden == 0 {
+                "No hidden ranking maze yet: each bot's latest version over every maze. Mean score: run-1 steps + run-0 steps / 30, a match that did not finish counts as 1000; lower is better.".to_string()
+            } else {
+                "Each bot's latest version over every maze, public and hidden. Lower is better."
+                    .to_string()
+            },
+            "scope=all".to_string(),
+        ),
+        Scope::Tournament(id) => {
+            let name = tournaments
+                .iter()
+                .find(|t| t.tournament_id == id)
+                .map_or_else(|| format!("tournament {id}"), |t| t.name.clone());
+            (
+                format!("Tournament: {name}"),
+                "Every bot version in the tournament over its mazes. Lower is better.".into(),
+                format!("tournament={id}"),
+            )
+        }
+    };
+    let latest = match (scope, tournaments.first()) {
+        (Scope::Tournament(_), _) | (_, None) => None,
+        (_, Some(t)) => Some((
+            t.clone(),
+            section(
+                String::new(),
+                String::new(),
+                board(Scope::Tournament(t.tournament_id)).await?,
+                format!("tournament={}", t.tournament_id),
+                SortKey::Rank,
+            ),
+        )),
+    };
+    let mut tabs = vec![
+        (
+            "Ranking (hidden mazes)".to_string(),
+            "/?scope=ranking".to_string(),
+            scope == Scope::Ranking,
+        ),
+        (
+            "All mazes".to_string(),
+            "/?scope=all".to_string(),
+            scope == Scope::All,
+        ),
+    ];
+    for t in tournaments.iter().take(5) {
+        tabs.push((
+            t.name.clone(),
+            format!("/?tournament={}", t.tournament_id),
+            scope == Scope::Tournament(t.tournament_id),
+        ));
+    }
+    Ok(Html(web::leaderboard(&web::LeaderboardPage {
+        main: section(heading, note, rows, query, sort),
+        latest,
+        tabs,
+        tournaments,
+        mazes,
+    })))
+}
+
+fn section(
+    heading: String,
+    note: String,
+    mut rows: Vec<Standing>,
+    query: String,
+    sort: SortKey,
+) -> StandingsSection {
+    sort.sort(&mut rows);
+    StandingsSection {
+        heading,
+        note,
+        rows,
+        query,
+        sort,
+    }
+}
+
+async fn bots_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
+    Ok(Html(web::bots(&state.storage.list_bots().await?)))
+}
+
+async fn mazes_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
+    Ok(Html(web::mazes(&state.storage.list_mazes().await?)))
+}
+
+/// Names of bots and mazes, to label match lines.
+struct Names {
+    bots: BTreeMap<i64, String>,
+    mazes: BTreeMap<i64, String>,
+}
+
+impl Names {
+    async fn load(state: &AppState) -> ApiResult<Names> {
+        Ok(Names {
+            bots: state
+                .storage
+                .list_bots()
+                .await?
+                .into_iter()
+                .map(|b| (b.bot_id, b.name))
+                .collect(),
+            mazes: state
+                .storage
+                .list_mazes()
+                .await?
+                .into_iter()
+                .map(|m| (m.maze_id, m.name))
+                .collect(),
+        })
+    }
+
+    fn line(&self, row: MatchRow) -> MatchLine {
+        MatchLine {
+            bot: self.bots.get(&row.bot_id).cloned().unwrap_or_default(),
+            maze: self.mazes.get(&row.maze_id).cloned().unwrap_or_default(),
+            reason: public_reason(&row),
+            row,
+        }
+    }
+}
+
+/// A failure's reason as anyone may see it: on a hidden maze only its step (the text
+/// could carry what the bot sensed).
+fn public_reason(row: &MatchRow) -> Option<String> {
+    let record = parse_record(row);
+    let error = record.get("error").filter(|e| !e.is_null())?;
+    let step = error.get("step").and_then(serde_json::Value::as_u64);
+    if row.maze_hidden {
+        return Some(step.map_or_else(
+            || "failed (hidden maze: details for the admin only)".into(),
+            |s| format!("failed at step {s} (hidden maze: details for the admin only)"),
+        ));
+    }
+    let reason = error.get("reason").and_then(|r| r.as_str()).unwrap_or("");
+    Some(match step {
+        Some(s) if !reason.contains(&format!("step {s}")) => format!("step {s}: {reason}"),
+        _ => reason.to_string(),
+    })
+}
+
+async fn bot_page(
+    State(state): State<AppState>,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<Html<String>> {
+    let bot = state
+        .storage
+        .get_bot(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no bot {id}")))?;
+    let mut versions = state.storage.bot_versions(id).await?;
+    versions.reverse();
+    let (rows, total) = state
+        .storage
+        .list_matches(
+            &MatchFilter {
+                bot_id: Some(id),
+                ..MatchFilter::default()
+            },
+            Page {
+                offset: 0,
+                limit: RECENT,
+            },
+        )
+        .await?;
+    let names = Names::load(&state).await?;
+    Ok(Html(web::bot(&web::BotPage {
+        bot,
+        versions,
+        recent: rows.into_iter().map(|r| names.line(r)).collect(),
+        total_matches: total,
+    })))
+}
+
+async fn maze_page(
+    State(state): State<AppState>,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<Html<String>> {
+    let m = super::mazes::find_maze(&state, id).await?;
+    let svg = if m.hidden {
+        None
+    } else {
+        mazefile::parse(m.layout.as_bytes()).ok().map(|maze| {
+            let path = solver::solve(&maze).map(|s| s.path);
+            render::svg(&maze, path.as_deref())
+        })
+    };
+    let (rows, _) = state
+        .storage
+        .list_matches(
+            &MatchFilter {
+                maze_id: Some(id),
+                ..MatchFilter::default()
+            },
+            Page {
+                offset: 0,
+                limit: RECENT,
+            },
+        )
+        .await?;
+    let names = Names::load(&state).await?;
+    let lines: Vec<MatchLine> = rows.into_iter().map(|r| names.line(r)).collect();
+    Ok(Html(web::maze(&m, svg.as_deref(), &lines)))
+}
+
+async fn matches_page(
+    State(state): State<AppState>,
+    AppQuery(q): AppQuery<MatchListQuery>,
+) -> ApiResult<Html<String>> {
+    let (filter, page) = q.parse()?;
+    let (rows, total) = state.storage.list_matches(&filter, page).await?;
+    let names = Names::load(&state).await?;
+    let mut parts = Vec::new();
+    let mut query = Vec::new();
+    if let Some(b) = filter.bot_id {
+        parts.push(format!(
+            "bot {}",
+            names.bots.get(&b).cloned().unwrap_or(b.to_string())
+        ));
+        query.push(format!("bot_id={b}"));
+    }
+    if let Some(t) = filter.tournament_id {
+        parts.push(format!("tournament {t}"));
+        query.push(format!("tournament_id={t}"));
+    }
+    if let Some(m) = filter.maze_id {
+        parts.push(format!(
+            "maze {}",
+            names.mazes.get(&m).cloned().unwrap_or(m.to_string())
+        ));
+        query.push(format!("maze_id={m}"));
+    }
+    if let Some(s) = &filter.status {
+        parts.push(format!("status {s}"));
+        query.push(format!("status={s}"));
+    }
+    let lines: Vec<MatchLine> = rows.into_iter().map(|r| names.line(r)).collect();
+    let pager = Pager {
+        base: if query.is_empty() {
+            "/matches".into()
+        } else {
+            format!("/matches?{}", query.join("&"))
+        },
+        offset: page.offset,
+        limit: page.limit,
+        total,
+    };
+    let filters = if parts.is_empty() {
+        String::new()
+    } else {
+        format!("Matches of {}.", parts.join(", "))
+    };
+    Ok(Html(web::matches(&lines, &filters, &pager)))
+}
+
+async fn match_page(
+    State(state): State<AppState>,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<Html<String>> {
+    let row = state
+        .storage
+        .get_match(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))?;
+    let names = Names::load(&state).await?;
+    let hidden = row.maze_hidden;
+    let mut record: Option<MatchRecord> = None;
+    let mut maze = None;
+    if !hidden {
+        if let (Some(text), Some(trace)) = (&row.record, state.storage.get_trace(id).await?) {
+            let mut r: MatchRecord = serde_json::from_str(text)
+                .map_err(|e| ApiError::Internal(format!("match {id}: unreadable record: {e}")))?;
+            r.trace = serde_json::from_str(&trace).unwrap_or_default();
+            let m = super::mazes::find_maze(&state, row.maze_id).await?;
+            maze = mazefile::parse(m.layout.as_bytes()).ok();
+            r.maze_layout = Some(m.layout);
+            record = Some(r);
+        }
+    }
+    let line = names.line(row);
+    let title = format!(
+        "match {id}: {} on {} (seed {})",
+        line.bot, line.maze, line.row.seed
+    );
+    let viewer = record
+        .as_ref()
+        .map(|r| ViewerData::new(title, r, maze.as_ref(), format!("match-{id}.json")));
+    Ok(Html(web::match_page(&web::MatchPage { line, viewer })))
+}
+
+/// Query of `/tournaments`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ListQuery {
+    offset: Option<i64>,
+    limit: Option<i64>,
+}
+
+async fn tournaments_page(
+    State(state): State<AppState>,
+    AppQuery(q): AppQuery<ListQuery>,
+) -> ApiResult<Html<String>> {
+    let page = page(q.offset, q.limit)?;
+    let (rows, total) = state.storage.list_tournaments(page).await?;
+    let pager = Pager {
+        base: "/tournaments".into(),
+        offset: page.offset,
+        limit: page.limit,
+        total,
+    };
+    Ok(Html(web::tournaments(&rows, &pager)))
+}
+
+async fn tournament_page(
+    State(state): State<AppState>,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<Html<String>> {
+    let t = state
+        .storage
+        .get_tournament(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+    let standings = for_caller(
+        state.storage.leaderboard(Scope::Tournament(id)).await?,
+        &Caller::Anonymous,
+    );
+    let names = Names::load(&state).await?;
+    let mut bots: Vec<(i64, String)> = Vec::new();
+    let mut mazes: Vec<(i64, String)> = Vec::new();
+    let mut cells: BTreeMap<(i64, i64), web::Cell> = BTreeMap::new();
+    let mut failed = std::collections::BTreeSet::new();
+    for row in state.storage.tournament_matches(id).await? {
+        if !bots.iter().any(|(b, _)| *b == row.bot_id) {
+            bots.push((
+                row.bot_id,
+                names.bots.get(&row.bot_id).cloned().unwrap_or_default(),
+            ));
+        }
+        if !mazes.iter().any(|(m, _)| *m == row.maze_id) {
+            mazes.push((
+                row.maze_id,
+                names.mazes.get(&row.maze_id).cloned().unwrap_or_default(),
+            ));
+        }
+        let key = (row.bot_id, row.maze_id);
+        let c = cells.entry(key).or_default();
+        c.total += 1;
+        match row.status.as_str() {
+            "queued" | "running" => {}
+            "finished" => {
+                c.played += 1;
+                c.finished += 1;
+                c.score_sum += row.score.unwrap_or(0.0);
+                c.link.get_or_insert(row.match_id);
+            }
+            _ => {
+                c.played += 1;
+                // A cell links to its first failed match, else to its first match.
+                if failed.insert(key) {
+                    c.link = Some(row.match_id);
+                }
+            }
+        }
+    }
+    Ok(Html(web::tournament(&web::TournamentPage {
+        standings: section(
+            String::new(),
+            String::new(),
+            standings,
+            format!("tournament={id}"),
+            SortKey::Rank,
+        ),
+        tournament: t,
+        bots,
+        mazes,
+        cells,
+    })))
+}

@@ -1,0 +1,136 @@
+//! `mazearena match show`: a stored match, as its bot's author wants to see it: the
+//! result, why it failed, the end of the bot's stderr, and its HTML replay.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, Subcommand};
+
+use crate::engine::mazefile;
+use crate::runner::MatchRecord;
+use crate::storage::Storage;
+
+/// `mazearena match ...`.
+#[derive(Debug, Subcommand)]
+pub enum MatchCommand {
+    /// Print a stored match: result, reason, stderr tail; optionally its HTML replay.
+    Show(ShowArgs),
+}
+
+/// Arguments of `mazearena match show`.
+#[derive(Debug, Args)]
+pub struct ShowArgs {
+    /// The match id (as `mazearena tournament` and the server print it).
+    id: i64,
+    /// The database.
+    #[arg(
+        long,
+        env = "MAZEARENA_DATABASE",
+        default_value = "sqlite://mazearena.db"
+    )]
+    database: String,
+    /// Print the stored record as JSON (with the trace when --trace is given).
+    #[arg(long)]
+    json: bool,
+    /// Write the match's HTML replay viewer to this file.
+    #[arg(long)]
+    html: Option<PathBuf>,
+    /// Write the replay (record, trace and maze, JSON) to this file.
+    #[arg(long)]
+    replay: Option<PathBuf>,
+}
+
+/// Runs `mazearena match ...`.
+///
+/// # Errors
+/// The database, an unknown match, or files that cannot be written.
+pub fn run(cmd: MatchCommand) -> anyhow::Result<()> {
+    let MatchCommand::Show(args) = cmd;
+    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
+    runtime.block_on(show(args))
+}
+
+async fn show(args: ShowArgs) -> anyhow::Result<()> {
+    let storage = Storage::open(&args.database)
+        .await
+        .with_context(|| format!("cannot open the database {}", args.database))?;
+    let row = storage
+        .get_match(args.id)
+        .await?
+        .with_context(|| format!("no match {} in {}", args.id, args.database))?;
+    let bot = storage.get_bot(row.bot_id).await?;
+    let maze_row = storage.get_maze(row.maze_id).await?;
+    let bot_name = bot.map_or_else(|| format!("bot {}", row.bot_id), |b| b.name);
+    let maze_name = maze_row
+        .as_ref()
+        .map_or_else(|| format!("maze {}", row.maze_id), |m| m.name.clone());
+    println!(
+        "match {}: {bot_name} v{} on {maze_name}, seed {}{}",
+        row.match_id,
+        row.version,
+        row.seed,
+        row.tournament_id
+            .map_or_else(String::new, |t| format!(", tournament {t}"))
+    );
+    let Some(text) = &row.record else {
+        println!("status: {} (not played yet)", row.status);
+        return Ok(());
+    };
+    let mut record: MatchRecord = serde_json::from_str(text)
+        .with_context(|| format!("match {}: the stored record cannot be read", row.match_id))?;
+    if let Some(trace) = storage.get_trace(row.match_id).await? {
+        record.trace = serde_json::from_str(&trace).unwrap_or_default();
+    }
+    let maze = maze_row
+        .as_ref()
+        .and_then(|m| mazefile::parse(m.layout.as_bytes()).ok());
+    record.maze_layout = maze_row.map(|m| m.layout);
+    if args.json {
+        println!("{}", serde_json::to_string(&record.summary())?);
+    } else {
+        print_record(&record);
+    }
+    if let Some(path) = &args.replay {
+        std::fs::write(path, serde_json::to_string(&record)?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = &args.html {
+        let title = format!("match {}: {bot_name} on {maze_name}", row.match_id);
+        super::replay::write_html(&record, maze.as_ref(), title, path)?;
+        eprintln!("wrote {}", path.display());
+    }
+    storage.close().await;
+    Ok(())
+}
+
+fn print_record(r: &MatchRecord) {
+    let steps = |s: Option<u32>| s.map_or("-".to_string(), |n| n.to_string());
+    println!(
+        "status: {}   score: {}   run 0: {} steps   run 1: {} steps   total: {}",
+        r.status,
+        r.score.map_or("-".to_string(), |s| format!("{s:.3}")),
+        steps(r.run0_steps),
+        steps(r.run1_steps),
+        r.total_steps
+    );
+    for w in &r.warnings {
+        println!("warning at step {}: {}", w.step, w.message);
+    }
+    for n in &r.notices {
+        println!("note: {}", n.message);
+    }
+    if let Some(e) = &r.error {
+        let at = e.step.map_or_else(String::new, |s| format!(" (step {s})"));
+        println!("reason{at}: {}", e.reason);
+        if let Some(line) = &e.line {
+            println!("offending line: {line}");
+        }
+    }
+    let tail: Vec<&str> = r.stderr_tail.lines().rev().take(20).collect();
+    if !tail.is_empty() {
+        println!("last lines of the bot's stderr:");
+        for line in tail.into_iter().rev() {
+            println!("  | {line}");
+        }
+    }
+}

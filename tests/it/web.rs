@@ -1,0 +1,259 @@
+//! The web face in a real browser: the server's pages over a real tournament, the match
+//! page's replay viewer, and the offline HTML file of `mazearena replay`. Screenshots
+//! go to `target/browser-artifacts/`.
+
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
+
+use super::browser::Browser;
+use super::support::{ADMIN, TestServer, mazearena, register, root, simple_bot_files};
+
+/// Steps the viewer forward `n` times from where it is, then checks that the robot
+/// drawn is at the trace's position and heading after step `k` (the step shown).
+async fn check_robot(b: &Browser, trace: &[Value], k: usize, what: &str) {
+    assert_eq!(
+        b.attr("#viewer", "data-step").await.as_deref(),
+        Some(k.to_string().as_str()),
+        "{what}: the viewer shows step {k}"
+    );
+    let (x, y, heading) = if k == 0 {
+        (0, 0, "up".to_string())
+    } else {
+        let s = &trace[k - 1];
+        (
+            s["position"]["x"].as_i64().unwrap(),
+            s["position"]["y"].as_i64().unwrap(),
+            s["heading"].as_str().unwrap().to_string(),
+        )
+    };
+    assert_eq!(
+        b.attr("#robot", "data-x").await,
+        Some(x.to_string()),
+        "{what}: x at step {k}"
+    );
+    assert_eq!(
+        b.attr("#robot", "data-y").await,
+        Some(y.to_string()),
+        "{what}: y at step {k}"
+    );
+    assert_eq!(
+        b.attr("#robot", "data-heading").await,
+        Some(heading),
+        "{what}: heading at step {k}"
+    );
+}
+
+/// Drives the viewer on the page that is open: forward, back, keyboard, the debug
+/// layer, jump to run 1.
+async fn drive_viewer(b: &Browser, trace: &[Value], what: &str) {
+    assert!(
+        trace.len() > 12,
+        "{what}: a trace long enough to step through"
+    );
+    check_robot(b, trace, 0, what).await;
+    for _ in 0..9 {
+        b.click("#btn-forward").await;
+    }
+    check_robot(b, trace, 9, what).await;
+    b.click("#btn-back").await;
+    b.click("#btn-back").await;
+    check_robot(b, trace, 7, what).await;
+    // The keyboard: the right arrow steps forward.
+    b.client
+        .find(fantoccini::Locator::Css("body"))
+        .await
+        .unwrap()
+        .send_keys("\u{E014}")
+        .await
+        .unwrap();
+    check_robot(b, trace, 8, what).await;
+    // The debug layer: drawn (the bot sends debug objects), hidden, shown again.
+    let drawn = || async {
+        b.client
+            .execute(
+                "return document.querySelector('#debug-layer').childElementCount",
+                vec![],
+            )
+            .await
+            .unwrap()
+            .as_i64()
+            .unwrap()
+    };
+    assert!(
+        drawn().await > 0,
+        "{what}: the bot's debug drawing is shown"
+    );
+    assert_ne!(
+        b.attr("#debug-layer", "display").await.as_deref(),
+        Some("none")
+    );
+    assert!(
+        !b.text("#debug-text").await.is_empty(),
+        "{what}: the debug text"
+    );
+    b.screenshot(&format!("{what}-step8-debug")).await;
+    b.click("#layer-debug").await;
+    assert_eq!(
+        b.attr("#debug-layer", "display").await.as_deref(),
+        Some("none"),
+        "{what}: the debug layer hides"
+    );
+    b.screenshot(&format!("{what}-step8-no-debug")).await;
+    b.click("#layer-debug").await;
+    assert_ne!(
+        b.attr("#debug-layer", "display").await.as_deref(),
+        Some("none")
+    );
+    // Jump to run 1: the first step of run 1.
+    let first_run1 = trace.iter().position(|s| s["run"] == 1).unwrap() + 1;
+    b.click("#btn-run1").await;
+    check_robot(b, trace, first_run1, what).await;
+    b.screenshot(&format!("{what}-run1")).await;
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn pages_and_the_match_viewer_in_a_real_browser() {
+    let Some(b) = Browser::start("pages_and_the_match_viewer_in_a_real_browser").await else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "2"]);
+    let (simple, token) = register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let crasher =
+        std::fs::read_to_string(root().join("tests/fixtures/bots/exits_early.py")).unwrap();
+    let (broken, _) = register(
+        &server,
+        "broken",
+        "python3 bot.py",
+        json!({"bot.py": crasher}),
+    )
+    .await;
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "autumn cup", "bot_ids": [simple, broken], "maze_ids": [1, 2], "repeats": 1}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    let tid = t["tournament_id"].as_i64().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let (_, v) = server.get(&format!("/api/tournaments/{tid}"), None).await;
+        if v["done"] == v["total"] {
+            break;
+        }
+        assert!(Instant::now() < deadline, "the tournament did not end: {v}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+
+    // The leaderboard: no hidden maze yet, so the standings over all mazes and the
+    // latest tournament.
+    b.open(&format!("{}/", server.base), "table.standings")
+        .await;
+    let html = b.source().await;
+    assert!(html.contains("Standings over all mazes"), "{html}");
+    assert!(html.contains("autumn cup") && html.contains("simple") && html.contains("broken"));
+    b.screenshot("leaderboard").await;
+    // Sorting is a link: by name puts "broken" first.
+    b.open(
+        &format!("{}/?scope=all&sort=name", server.base),
+        "table.standings",
+    )
+    .await;
+    let first = b
+        .text("table.standings tbody tr:first-child td:nth-child(2)")
+        .await;
+    assert!(first.starts_with("broken"), "{first}");
+
+    // A bot page: versions and recent matches with their reasons.
+    b.open(&format!("{}/bots/{broken}", server.base), "table.versions")
+        .await;
+    let html = b.source().await;
+    assert!(html.contains("crashed"), "the failed matches are listed");
+    assert!(html.contains("before answering step"), "with their reason");
+    b.screenshot("bot-page").await;
+
+    // The tournament page: progress and the bot x maze table.
+    b.open(&format!("{}/tournaments/{tid}", server.base), "table.grid")
+        .await;
+    assert_eq!(b.attr("#progress", "data-done").await, Some("4".into()));
+    let grid = b.text("table.grid").await;
+    assert!(grid.contains("simple") && grid.contains("broken"), "{grid}");
+    b.screenshot("tournament-page").await;
+
+    // A match page with the viewer, checked against the API's replay.
+    let (_, list) = server
+        .get(
+            &format!("/api/matches?bot_id={simple}&tournament_id={tid}&status=finished"),
+            None,
+        )
+        .await;
+    assert_eq!(list["total"], 2, "{list}");
+    let m = list["items"][0]["match_id"].as_i64().unwrap();
+    let (_, replay) = server.get(&format!("/api/matches/{m}/replay"), None).await;
+    let trace = replay["trace"].as_array().unwrap().clone();
+    b.open(&format!("{}/matches/{m}", server.base), "#robot")
+        .await;
+    b.screenshot("match-page").await;
+    drive_viewer(&b, &trace, "match-page").await;
+
+    // The owner sees the logs of failed matches with the token.
+    let _ = token;
+    b.quit().await;
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn the_offline_replay_file_shows_the_same() {
+    let Some(b) = Browser::start("the_offline_replay_file_shows_the_same").await else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let replay = dir.path().join("m.json");
+    let html = dir.path().join("m.html");
+    let out = mazearena(&[
+        "run",
+        "--maze",
+        "mazes/gen-12-s1.txt",
+        "--bot",
+        "python3 simple_bot.py",
+        "--bot-dir",
+        "bots/python",
+        "--replay",
+        replay.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let out = mazearena(&[
+        "replay",
+        replay.to_str().unwrap(),
+        "-o",
+        html.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let page = std::fs::read_to_string(&html).unwrap();
+    // Self-contained: nothing is loaded from anywhere.
+    for remote in ["<script src", "<link", "fetch(", "@import", "url(http"] {
+        assert!(
+            !page.contains(remote),
+            "the offline file loads nothing ({remote})"
+        );
+    }
+    let record: Value = serde_json::from_str(&std::fs::read_to_string(&replay).unwrap()).unwrap();
+    assert!(
+        record["maze_layout"].as_str().unwrap().starts_with("12\n"),
+        "the replay carries its maze"
+    );
+    let trace = record["trace"].as_array().unwrap().clone();
+    b.open(&format!("file://{}", html.display()), "#robot")
+        .await;
+    b.screenshot("offline").await;
+    drive_viewer(&b, &trace, "offline").await;
+    b.quit().await;
+}
