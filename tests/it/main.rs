@@ -1,11 +1,13 @@
 //! The one integration-test binary (one link step for CI): real files, real processes.
 
 mod api;
+mod authors;
 mod bots;
 mod browser;
 mod cli;
 mod hostile;
 mod mazefiles;
+mod pages;
 mod referee;
 mod runner;
 mod support;
