@@ -8,6 +8,7 @@ mod cli;
 mod hostile;
 mod mazefiles;
 mod pages;
+mod readme;
 mod referee;
 mod runner;
 mod support;

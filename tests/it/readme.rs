@@ -1,0 +1,169 @@
+//! The README's examples run as written: its server section against a fresh real
+//! server, one command at a time as a user would type them (letting the queued matches
+//! and builds finish in between), and its local viewer example.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use crate::support::{ADMIN, TestServer, root, sandbox};
+
+/// The ```sh blocks of the README section whose heading is `section`.
+fn blocks(section: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let mut out = Vec::new();
+    let mut in_section = false;
+    let mut block: Option<String> = None;
+    for line in text.lines() {
+        if let Some(b) = block.as_mut() {
+            if line.starts_with("```") {
+                out.push(block.take().unwrap());
+            } else {
+                b.push_str(line);
+                b.push('\n');
+            }
+            continue;
+        }
+        if line.starts_with("## ") {
+            in_section = line.trim_start_matches("## ") == section;
+        } else if in_section && line == "```sh" {
+            block = Some(String::new());
+        }
+    }
+    assert!(
+        !out.is_empty(),
+        "the README has a section {section:?} with examples"
+    );
+    out
+}
+
+/// Splits a shell block into whole commands (a command may span lines in quotes or
+/// after a backslash); comments are dropped.
+fn commands(block: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut acc = String::new();
+    for line in block.lines() {
+        if acc.is_empty() && (line.trim().is_empty() || line.trim_start().starts_with('#')) {
+            continue;
+        }
+        acc.push_str(line);
+        acc.push('\n');
+        let complete = !line.ends_with('\\')
+            && Command::new("bash")
+                .args(["-n", "-c", &acc])
+                .stderr(std::process::Stdio::null())
+                .status()
+                .unwrap()
+                .success();
+        if complete {
+            out.push(std::mem::take(&mut acc));
+        }
+    }
+    assert!(acc.is_empty(), "an unfinished command: {acc}");
+    out
+}
+
+/// Runs one command in bash in `dir`, with `mazearena` being the binary under test.
+fn sh(dir: &Path, command: &str, env: &[(&str, &str)]) -> String {
+    let script = format!(
+        "set -o pipefail\nmazearena() {{ \"{}\" \"$@\"; }}\n{command}",
+        env!("CARGO_BIN_EXE_mazearena")
+    );
+    let out = Command::new("bash")
+        .args(["-c", &script])
+        .envs(env.iter().copied())
+        .env("MAZEARENA_SANDBOX", sandbox().level())
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "README command failed:\n{command}\nstdout: {stdout}\nstderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+async fn settle(server: &TestServer) {
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let (_, q) = server.get("/api/matches?status=queued&limit=1", None).await;
+        let (_, r) = server
+            .get("/api/matches?status=running&limit=1", None)
+            .await;
+        let (_, bots) = server.get("/api/bots", None).await;
+        let building = bots
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|b| b["build_status"] == "building");
+        if q["total"] == 0 && r["total"] == 0 && !building {
+            return;
+        }
+        assert!(Instant::now() < deadline, "the queue did not empty");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn the_readme_server_examples_run_as_written_on_a_fresh_server() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "2"]);
+    let work = dir.path().join("work");
+    std::fs::create_dir_all(&work).unwrap();
+    std::os::unix::fs::symlink(root().join("bots"), work.join("bots")).unwrap();
+    let addr = server.base.trim_start_matches("http://").to_string();
+    let mut token = String::new();
+    let mut ran = 0;
+    for block in blocks("Running the server") {
+        if block.contains("mazearena serve") || block.contains("docker compose") {
+            continue; // the test started the server itself; no Docker here
+        }
+        for command in commands(&block) {
+            let command = command.replace("localhost:8080", &addr);
+            let out = sh(&work, &command, &[("ADMIN", ADMIN), ("TOKEN", &token)]);
+            assert!(
+                !out.contains("\"error\":{"),
+                "README command answered an error:\n{command}\n{out}"
+            );
+            if token.is_empty() {
+                if let Some(t) = out.split("\"owner_token\":\"").nth(1) {
+                    token = t.split('"').next().unwrap().to_string();
+                }
+            }
+            ran += 1;
+            settle(&server).await;
+        }
+    }
+    assert!(ran >= 12, "only {ran} commands found");
+    // What the examples did, checked: the match finished, the C bot was built, the
+    // tournament on the hidden maze is complete.
+    let (_, m) = server.get("/api/matches/1", None).await;
+    assert_eq!(m["status"], "finished", "{m}");
+    let (_, c) = server.get("/api/bots/3", None).await;
+    assert_eq!(c["versions"][0]["build_status"], "ready", "{c}");
+    assert_eq!(
+        c["versions"][0]["env_names"],
+        serde_json::json!(["BOT_MODE"])
+    );
+    let (_, t) = server.get("/api/tournaments/1", None).await;
+    assert_eq!(t["done"], t["total"], "{t}");
+    assert_eq!(t["total"], 6);
+}
+
+#[test]
+fn the_readme_viewer_example_runs_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(root().join("bots"), dir.path().join("bots")).unwrap();
+    std::os::unix::fs::symlink(root().join("mazes"), dir.path().join("mazes")).unwrap();
+    let block = blocks("Testing a bot locally")
+        .into_iter()
+        .find(|b| b.contains("--html match.html"))
+        .expect("the viewer example");
+    for command in commands(&block) {
+        sh(dir.path(), &command, &[]);
+    }
+    let html = std::fs::read_to_string(dir.path().join("match.html")).unwrap();
+    assert!(html.contains("id=\"replay-data\"") && html.contains("\"maze_layout\""));
+}
