@@ -316,13 +316,15 @@ pub const STATUSES: [&str; 11] = [
 impl MatchListQuery {
     /// The storage filter and page, or a 400 naming the bad parameter.
     pub(super) fn parse(&self) -> ApiResult<(MatchFilter, Page)> {
-        if let Some(s) = &self.status {
-            if !STATUSES.contains(&s.as_str()) {
-                return Err(ApiError::BadRequest(format!(
-                    "unknown status {s:?}: use one of {}",
-                    STATUSES.join(", ")
-                )));
-            }
+        if let Some(s) = self
+            .status
+            .as_ref()
+            .filter(|s| !STATUSES.contains(&s.as_str()))
+        {
+            return Err(ApiError::BadRequest(format!(
+                "unknown status {s:?}: use one of {}",
+                STATUSES.join(", ")
+            )));
         }
         Ok((
             MatchFilter {

@@ -388,16 +388,22 @@ async fn match_page(
     let hidden = row.maze_hidden;
     let mut record: Option<MatchRecord> = None;
     let mut maze = None;
-    if !hidden {
-        if let (Some(text), Some(trace)) = (&row.record, state.storage.get_trace(id).await?) {
-            let mut r: MatchRecord = serde_json::from_str(text)
-                .map_err(|e| ApiError::Internal(format!("match {id}: unreadable record: {e}")))?;
-            r.trace = serde_json::from_str(&trace).unwrap_or_default();
-            let m = super::mazes::find_maze(&state, row.maze_id).await?;
-            maze = mazefile::parse(m.layout.as_bytes()).ok();
-            r.maze_layout = Some(m.layout);
-            record = Some(r);
-        }
+    let trace = if hidden {
+        None
+    } else {
+        state.storage.get_trace(id).await?
+    };
+    // A record that cannot be read shows the page without its viewer.
+    let parsed = row
+        .record
+        .as_deref()
+        .and_then(|text| serde_json::from_str::<MatchRecord>(text).ok());
+    if let (Some(mut r), Some(trace)) = (parsed, trace) {
+        r.trace = serde_json::from_str(&trace).unwrap_or_default();
+        let m = super::mazes::find_maze(&state, row.maze_id).await?;
+        maze = mazefile::parse(m.layout.as_bytes()).ok();
+        r.maze_layout = Some(m.layout);
+        record = Some(r);
     }
     let line = names.line(row);
     let title = format!(

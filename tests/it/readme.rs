@@ -127,10 +127,12 @@ async fn the_readme_server_examples_run_as_written_on_a_fresh_server() {
                 !out.contains("\"error\":{"),
                 "README command answered an error:\n{command}\n{out}"
             );
-            if token.is_empty() {
-                if let Some(t) = out.split("\"owner_token\":\"").nth(1) {
-                    token = t.split('"').next().unwrap().to_string();
-                }
+            if let Some(t) = out
+                .split("\"owner_token\":\"")
+                .nth(1)
+                .filter(|_| token.is_empty())
+            {
+                token = t.split('"').next().unwrap().to_string();
             }
             ran += 1;
             settle(&server).await;
