@@ -128,7 +128,7 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     .await;
     let crasher =
         std::fs::read_to_string(root().join("tests/fixtures/bots/exits_early.py")).unwrap();
-    let (broken, _) = register(
+    let (broken, broken_token) = register(
         &server,
         "broken",
         "python3 bot.py",
@@ -179,6 +179,21 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     let html = b.source().await;
     assert!(html.contains("crashed"), "the failed matches are listed");
     assert!(html.contains("before answering step"), "with their reason");
+    assert!(!html.contains("giving up at the first sense"), "stderr is the owner's");
+    // The owner pastes the token: the failed matches' stderr appears.
+    b.client
+        .find(fantoccini::Locator::Css("#owner-token"))
+        .await
+        .unwrap()
+        .send_keys(&broken_token)
+        .await
+        .unwrap();
+    b.click("#owner-form button").await;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !b.text("#owner-logs").await.contains("giving up at the first sense") {
+        assert!(Instant::now() < deadline, "the owner's logs did not appear");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
     b.screenshot("bot-page").await;
 
     // The tournament page: progress and the bot x maze table.
@@ -205,7 +220,6 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     b.screenshot("match-page").await;
     drive_viewer(&b, &trace, "match-page").await;
 
-    // The owner sees the logs of failed matches with the token.
     let _ = token;
     b.quit().await;
 }
