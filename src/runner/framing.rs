@@ -1,6 +1,7 @@
 //! Reading a bot's pipes safely: reply lines with a length cap, and a bounded stderr tail.
 
 use std::collections::VecDeque;
+use std::os::fd::AsFd;
 
 use tokio::io::{AsyncRead, AsyncReadExt};
 use tokio_util::codec::{AnyDelimiterCodec, FramedRead};
@@ -29,41 +30,122 @@ pub struct StderrLines {
     pub echo: bool,
 }
 
-/// Reads a bot's stderr to its end: keeps its last `cap` bytes (as [`read_tail`] does)
-/// and hands each complete line, cut to [`STDERR_LINE_BYTES`], to `lines`.
-pub async fn read_stderr<R: AsyncRead + Unpin>(
-    stream: R,
+/// A request to the stderr reader: take in every stderr byte the bot has written so far,
+/// then answer. The runner sends one after each answer so that the lines a bot wrote
+/// before answering are handed on before the next step starts, however late the
+/// reader's task would otherwise run.
+pub type StderrSync = tokio::sync::oneshot::Sender<()>;
+
+/// Reads a bot's stderr to its end: keeps its last `cap` bytes (with a note of how much was cut)
+/// and hands each complete line, cut to [`STDERR_LINE_BYTES`], to `lines`. On each
+/// request from `syncs` it first reads whatever the pipe already holds (without
+/// waiting), so that the lines written before that moment have been handed on when it
+/// answers.
+pub async fn read_stderr<R: AsyncRead + AsFd + Unpin>(
+    mut stream: R,
     cap: usize,
     lines: StderrLines,
+    mut syncs: tokio::sync::mpsc::UnboundedReceiver<StderrSync>,
 ) -> String {
-    let mut partial: Vec<u8> = Vec::new();
-    let mut sent = 0usize;
-    let mut emit = |line: &[u8]| {
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        let text = crate::protocol::excerpt(line, STDERR_LINE_BYTES);
-        if lines.echo {
-            eprintln!("  bot stderr | {text}");
+    let mut tail = Tail::new(cap);
+    let mut splitter = LineSplitter::new(lines);
+    let mut buf = vec![0u8; 8192];
+    let mut syncs_open = true;
+    loop {
+        tokio::select! {
+            biased;
+            request = syncs.recv(), if syncs_open => match request {
+                Some(answer) => {
+                    let eof = read_ready(&stream, &mut buf, |chunk| {
+                        tail.push(chunk);
+                        splitter.push(chunk);
+                    });
+                    let _ = answer.send(());
+                    if eof {
+                        break;
+                    }
+                }
+                None => syncs_open = false,
+            },
+            read = stream.read(&mut buf) => match read {
+                Ok(0) | Err(_) => break,
+                Ok(n) => {
+                    tail.push(&buf[..n]);
+                    splitter.push(&buf[..n]);
+                }
+            },
         }
-        if sent < STDERR_TRACE_BYTES {
-            sent += text.len() + 1;
-            let _ = lines.trace.send(text);
+    }
+    splitter.finish();
+    tail.into_text()
+}
+
+/// Reads what `fd` holds right now, without waiting, passing each chunk to `each`.
+/// Returns whether the end of the stream was reached.
+fn read_ready(fd: &impl AsFd, buf: &mut [u8], mut each: impl FnMut(&[u8])) -> bool {
+    use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+    loop {
+        let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLIN)];
+        match poll(&mut fds, PollTimeout::ZERO) {
+            Ok(n) if n > 0 => {}
+            _ => return false,
         }
-    };
-    let tail = read_tail_with(stream, cap, |chunk| {
+        let ready = fds[0].revents().unwrap_or(PollFlags::empty());
+        if !ready.intersects(PollFlags::POLLIN | PollFlags::POLLHUP) {
+            return false;
+        }
+        match nix::unistd::read(fd.as_fd(), buf) {
+            Ok(0) => return true,
+            Ok(n) => each(&buf[..n]),
+            Err(_) => return false,
+        }
+    }
+}
+
+/// Cuts a byte stream into lines for [`StderrLines`].
+struct LineSplitter {
+    lines: StderrLines,
+    partial: Vec<u8>,
+    sent: usize,
+}
+
+impl LineSplitter {
+    fn new(lines: StderrLines) -> Self {
+        LineSplitter {
+            lines,
+            partial: Vec::new(),
+            sent: 0,
+        }
+    }
+
+    fn push(&mut self, chunk: &[u8]) {
         for &b in chunk {
             if b == b'\n' {
-                emit(&partial);
-                partial.clear();
-            } else if partial.len() <= STDERR_LINE_BYTES {
-                partial.push(b);
+                self.emit();
+            } else if self.partial.len() <= STDERR_LINE_BYTES {
+                self.partial.push(b);
             }
         }
-    })
-    .await;
-    if !partial.is_empty() {
-        emit(&partial);
     }
-    tail
+
+    fn emit(&mut self) {
+        let line = std::mem::take(&mut self.partial);
+        let line = line.strip_suffix(b"\r").unwrap_or(&line);
+        let text = crate::protocol::excerpt(line, STDERR_LINE_BYTES);
+        if self.lines.echo {
+            eprintln!("  bot stderr | {text}");
+        }
+        if self.sent < STDERR_TRACE_BYTES {
+            self.sent += text.len() + 1;
+            let _ = self.lines.trace.send(text);
+        }
+    }
+
+    fn finish(mut self) {
+        if !self.partial.is_empty() {
+            self.emit();
+        }
+    }
 }
 
 /// A line reader over the bot's stdout that never buffers more than one capped line.
@@ -78,43 +160,43 @@ pub fn reply_reader<R: AsyncRead>(stdout: R) -> ReplyReader<R> {
     )
 }
 
-/// Reads `stream` to its end, keeping only the last `cap` bytes. Returns the tail as
-/// text (lossy UTF-8), prefixed with a note of how much was cut.
-pub async fn read_tail<R: AsyncRead + Unpin>(stream: R, cap: usize) -> String {
-    read_tail_with(stream, cap, |_| {}).await
+/// The last bytes of a stream, up to a cap, and how many came in all.
+struct Tail {
+    cap: usize,
+    kept: VecDeque<u8>,
+    total: u64,
 }
 
-async fn read_tail_with<R: AsyncRead + Unpin>(
-    mut stream: R,
-    cap: usize,
-    mut each: impl FnMut(&[u8]),
-) -> String {
-    let mut tail: VecDeque<u8> = VecDeque::with_capacity(cap.min(8192));
-    let mut total: u64 = 0;
-    let mut buf = vec![0u8; 8192];
-    loop {
-        match stream.read(&mut buf).await {
-            Ok(0) | Err(_) => break,
-            Ok(n) => {
-                total += n as u64;
-                each(&buf[..n]);
-                tail.extend(&buf[..n]);
-                if tail.len() > cap {
-                    let extra = tail.len() - cap;
-                    tail.drain(..extra);
-                }
-            }
+impl Tail {
+    fn new(cap: usize) -> Self {
+        Tail {
+            cap,
+            kept: VecDeque::with_capacity(cap.min(8192)),
+            total: 0,
         }
     }
-    let kept = tail.len() as u64;
-    let text = String::from_utf8_lossy(tail.make_contiguous()).into_owned();
-    if total > kept {
-        format!(
-            "[... {} earlier bytes of stderr not kept]\n{text}",
-            total - kept
-        )
-    } else {
-        text
+
+    fn push(&mut self, chunk: &[u8]) {
+        self.total += chunk.len() as u64;
+        self.kept.extend(chunk);
+        if self.kept.len() > self.cap {
+            let extra = self.kept.len() - self.cap;
+            self.kept.drain(..extra);
+        }
+    }
+
+    /// The tail as text (lossy UTF-8), prefixed with a note of how much was cut.
+    fn into_text(mut self) -> String {
+        let kept = self.kept.len() as u64;
+        let text = String::from_utf8_lossy(self.kept.make_contiguous()).into_owned();
+        if self.total > kept {
+            format!(
+                "[... {} earlier bytes of stderr not kept]\n{text}",
+                self.total - kept
+            )
+        } else {
+            text
+        }
     }
 }
 
@@ -177,36 +259,77 @@ mod tests {
         assert!(r.next().await.unwrap().is_err());
     }
 
-    #[tokio::test]
-    async fn stderr_lines_are_handed_on_one_by_one_and_cut() {
-        let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
-        let long = "y".repeat(STDERR_LINE_BYTES + 100);
-        let data = format!("one\r\ntwo\n{long}\nlast without newline");
-        let tail = read_stderr(
-            data.as_bytes(),
-            1000,
-            StderrLines {
-                trace: tx,
-                echo: false,
-            },
-        )
-        .await;
-        assert!(tail.ends_with("last without newline"));
+    fn lines_channel() -> (StderrLines, tokio::sync::mpsc::UnboundedReceiver<String>) {
+        let (tx, rx) = tokio::sync::mpsc::unbounded_channel();
+        let lines = StderrLines {
+            trace: tx,
+            echo: false,
+        };
+        (lines, rx)
+    }
+
+    fn received(rx: &mut tokio::sync::mpsc::UnboundedReceiver<String>) -> Vec<String> {
         let mut got = Vec::new();
         while let Ok(l) = rx.try_recv() {
             got.push(l);
         }
+        got
+    }
+
+    #[tokio::test]
+    async fn stderr_lines_are_handed_on_one_by_one_and_cut() {
+        let (mut tx, rx) = tokio::net::unix::pipe::pipe().unwrap();
+        let (lines, mut got) = lines_channel();
+        let (_syncs, sync_rx) = tokio::sync::mpsc::unbounded_channel();
+        let long = "y".repeat(STDERR_LINE_BYTES + 100);
+        let data = format!("one\r\ntwo\n{long}\nlast without newline");
+        tokio::io::AsyncWriteExt::write_all(&mut tx, data.as_bytes())
+            .await
+            .unwrap();
+        drop(tx);
+        let tail = read_stderr(rx, 1000, lines, sync_rx).await;
+        assert!(tail.ends_with("last without newline"));
+        let got = received(&mut got);
         assert_eq!(got[..2], ["one", "two"]);
         assert!(got[2].ends_with('…') && got[2].len() < STDERR_LINE_BYTES + 10);
         assert_eq!(got[3], "last without newline");
     }
 
     #[tokio::test]
-    async fn the_stderr_tail_is_bounded() {
+    async fn a_sync_hands_on_every_line_already_written() {
+        // The reader task is never polled between the write and the sync request on this
+        // single-threaded runtime: only the sync's own read can find the lines.
+        let (tx, rx) = tokio::net::unix::pipe::pipe().unwrap();
+        let (lines, mut got) = lines_channel();
+        let (syncs, sync_rx) = tokio::sync::mpsc::unbounded_channel();
+        let reader = tokio::spawn(read_stderr(rx, 1000, lines, sync_rx));
+        for step in 1..=50 {
+            let text = format!("step {step}\n");
+            assert_eq!(
+                nix::unistd::write(&tx, text.as_bytes()).unwrap(),
+                text.len()
+            );
+            let (answer, done) = tokio::sync::oneshot::channel();
+            syncs.send(answer).unwrap();
+            done.await.unwrap();
+            assert_eq!(received(&mut got), [format!("step {step}")]);
+        }
+        drop(tx);
+        assert!(reader.await.unwrap().ends_with("step 50\n"));
+    }
+
+    #[test]
+    fn the_stderr_tail_is_bounded() {
         let data: Vec<u8> = (0..100_000u32).map(|i| b'a' + (i % 26) as u8).collect();
-        let tail = read_tail(&data[..], 1000).await;
-        assert!(tail.starts_with("[... 99000 earlier bytes"));
-        assert!(tail.ends_with(std::str::from_utf8(&data[99_000..]).unwrap()));
-        assert_eq!(read_tail(&b"short"[..], 1000).await, "short");
+        let mut tail = Tail::new(1000);
+        for chunk in data.chunks(777) {
+            tail.push(chunk);
+        }
+        let text = tail.into_text();
+        assert!(text.starts_with("[... 99000 earlier bytes"));
+        assert!(text.ends_with(std::str::from_utf8(&data[99_000..]).unwrap()));
+        let mut short = Tail::new(1000);
+        short.push(b"short");
+        assert_eq!(short.into_text(), "short");
     }
 }

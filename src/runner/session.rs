@@ -21,10 +21,13 @@ use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
 /// How often the whole-match limits are looked at while the bot thinks.
 const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
 
+/// The longest the runner waits for the stderr reader to take in what the pipe holds.
+const STDERR_SYNC_WAIT: Duration = Duration::from_millis(500);
+
 /// Added to a timeout at step 1: the usual cause is an answer left in an output buffer.
 pub const STARTUP_HINT: &str = " (if the bot did print an answer, it may still sit in its output buffer: \
      flush stdout after every line, e.g. fflush(stdout) in C or print(..., flush=True) in Python; \
-     see docs/PROTOCOL.md \"Flush every line\")";
+     see docs/PROTOCOL.md \"Flush every answer\")";
 
 /// What one step's exchange gave.
 #[derive(Debug)]
@@ -64,6 +67,7 @@ pub struct Session {
     replies: framing::ReplyReader<tokio::process::ChildStdout>,
     stderr: tokio::task::JoinHandle<String>,
     stderr_lines: tokio::sync::mpsc::UnboundedReceiver<String>,
+    stderr_syncs: tokio::sync::mpsc::UnboundedSender<framing::StderrSync>,
     started: Instant,
     limits: Limits,
     cpu_mark: Option<u64>,
@@ -107,6 +111,7 @@ impl Session {
         let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let (lines, stderr_lines) = tokio::sync::mpsc::unbounded_channel();
+        let (stderr_syncs, syncs) = tokio::sync::mpsc::unbounded_channel();
         let lines = framing::StderrLines {
             trace: lines,
             echo: echo_stderr,
@@ -116,8 +121,10 @@ impl Session {
                 stderr,
                 framing::STDERR_TAIL_BYTES,
                 lines,
+                syncs,
             )),
             stderr_lines,
+            stderr_syncs,
             replies: framing::reply_reader(stdout),
             stdin,
             started,
@@ -133,9 +140,15 @@ impl Session {
         self.process.pid
     }
 
-    /// The bot's stderr lines that have arrived since the last call (bounded in total by
-    /// [`framing::STDERR_TRACE_BYTES`]).
-    pub fn take_stderr_lines(&mut self) -> Vec<String> {
+    /// The bot's stderr lines written since the last call (bounded in total by
+    /// [`framing::STDERR_TRACE_BYTES`]): the stderr reader first takes in all that the
+    /// pipe holds, so a line written before an answer is never handed on after it.
+    pub async fn take_stderr_lines(&mut self) -> Vec<String> {
+        let (answer, done) = tokio::sync::oneshot::channel();
+        if self.stderr_syncs.send(answer).is_ok() {
+            // The reader answers at once unless its task is starved; never wait long.
+            let _ = tokio::time::timeout(STDERR_SYNC_WAIT, done).await;
+        }
         let mut lines = Vec::new();
         while let Ok(line) = self.stderr_lines.try_recv() {
             lines.push(line);
