@@ -9,6 +9,7 @@ pub mod auth;
 pub mod bots;
 pub mod error;
 pub mod leaderboard;
+pub mod lists;
 pub mod matches;
 pub mod mazes;
 pub mod pages;

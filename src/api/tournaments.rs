@@ -213,7 +213,7 @@ async fn list_tournaments(
     State(state): State<AppState>,
     AppQuery(q): AppQuery<TournamentListQuery>,
 ) -> ApiResult<axum::Json<TournamentPage>> {
-    let page = super::matches::page(q.offset, q.limit)?;
+    let page = super::lists::page(q.offset, q.limit)?;
     let (rows, total) = state.storage.list_tournaments(page).await?;
     Ok(axum::Json(TournamentPage {
         items: rows

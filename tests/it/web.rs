@@ -179,7 +179,10 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     let html = b.source().await;
     assert!(html.contains("crashed"), "the failed matches are listed");
     assert!(html.contains("before answering step"), "with their reason");
-    assert!(!html.contains("giving up at the first sense"), "stderr is the owner's");
+    assert!(
+        !html.contains("giving up at the first sense"),
+        "stderr is the owner's"
+    );
     // The owner pastes the token: the failed matches' stderr appears.
     b.client
         .find(fantoccini::Locator::Css("#owner-token"))
@@ -190,7 +193,11 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
         .unwrap();
     b.click("#owner-form button").await;
     let deadline = Instant::now() + Duration::from_secs(10);
-    while !b.text("#owner-logs").await.contains("giving up at the first sense") {
+    while !b
+        .text("#owner-logs")
+        .await
+        .contains("giving up at the first sense")
+    {
         assert!(Instant::now() < deadline, "the owner's logs did not appear");
         tokio::time::sleep(Duration::from_millis(100)).await;
     }

@@ -546,9 +546,9 @@
       else return;
       e.preventDefault();
     });
-    // keep Space from also "clicking" a focused button on key release
+    // keep Space from also "clicking" a focused button or checkbox on key release
     document.addEventListener('keyup', function (e) {
-      if ((e.key === ' ' || e.key === 'Spacebar') && e.target && e.target.tagName === 'BUTTON' && root.contains(e.target)) e.preventDefault();
+      if ((e.key === ' ' || e.key === 'Spacebar') && e.target && (e.target.tagName === 'BUTTON' || e.target.type === 'checkbox') && root.contains(e.target)) e.preventDefault();
     });
 
     function hashStep() {

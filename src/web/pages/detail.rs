@@ -1,0 +1,223 @@
+//! The pages of one thing: a bot, a maze, a match (with the replay viewer), a
+//! tournament.
+
+use maud::{PreEscaped, html};
+
+use super::super::layout::{page, score, status, time};
+use super::super::viewer::{ViewerData, embed};
+use super::board::{StandingsSection, standings_table};
+use super::lists::{MatchLine, match_table, opt};
+use crate::storage::bots::{BotRow, BotVersionRow};
+use crate::storage::mazes::MazeRow;
+use crate::storage::tournaments::TournamentRow;
+
+/// A bot's page.
+#[derive(Debug, Clone)]
+pub struct BotPage {
+    /// The bot.
+    pub bot: BotRow,
+    /// Its versions, newest first.
+    pub versions: Vec<BotVersionRow>,
+    /// Its recent matches.
+    pub recent: Vec<MatchLine>,
+    /// How many matches it has in all.
+    pub total_matches: i64,
+}
+
+/// A bot's page: versions, recent matches; the owner can paste their token to see the
+/// logs (fetched from the API by the page's script, never put in the page).
+pub fn bot(p: &BotPage) -> String {
+    let b = &p.bot;
+    let body = html! {
+        h1 { (b.name) }
+        p.lead {
+            "Bot " (b.bot_id) ", registered " (time(b.created_at)) ". Latest version " (b.version) ": "
+            code { (b.command) } " "
+            @if b.is_paused() { (status("paused")) } @else { (status(&b.build_status)) }
+        }
+        @if let Some(reason) = &b.paused_reason {
+            p { strong { "Paused: " } (reason) }
+        }
+        h2 { "Versions" }
+        table.data.versions {
+            thead { tr { th.num { "version" } th { "command" } th { "build" } th.num { "files" } th { "uploaded" } th { "build log" } } }
+            tbody {
+                @for v in &p.versions {
+                    tr {
+                        td.num { (v.version) }
+                        td { code { (v.command) } }
+                        td {
+                            (status(&v.build_status))
+                            @if let Some(cmd) = &v.build_command { " " code.muted { (cmd) } }
+                        }
+                        td.num { (v.file_count) }
+                        td { (time(v.created_at)) }
+                        td {
+                            @if v.build_command.is_some() {
+                                a.build-log href="#" data-version=(v.version) { "show (owner)" }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        h2 { "Recent matches" }
+        (match_table(&p.recent))
+        p { a href={ "/matches?bot_id=" (b.bot_id) } { "All " (p.total_matches) " matches" } }
+        h2 { "Owner's logs" }
+        p.muted { "The bot's owner can see each failed match's stderr and the build logs: paste the owner token (it stays in this page and is sent only to this server's API)." }
+        form.inline #owner-form {
+            input #owner-token type="password" placeholder="owner token" autocomplete="off";
+            button type="submit" { "Show logs" }
+        }
+        div #owner-logs {}
+        script { (PreEscaped(OWNER_LOGS_JS.replace("BOT_ID", &b.bot_id.to_string()))) }
+    };
+    page(&b.name, body)
+}
+
+/// The bot page's script: the owner's logs, fetched with the pasted token.
+const OWNER_LOGS_JS: &str = include_str!("../assets/owner_logs.js");
+
+/// A maze's page: public mazes drawn with their optimal route; hidden ones named only.
+pub fn maze(m: &MazeRow, svg: Option<&str>, recent: &[MatchLine]) -> String {
+    let body = html! {
+        h1 { (m.name) }
+        @if m.hidden {
+            p.lead { "A hidden ranking maze: its layout, side and optimum are not shown." }
+        } @else {
+            p.lead {
+                "Public maze, " (m.dim) "x" (m.dim) ". Optimal run 1: "
+                @match m.optimum { Some(o) => { (o) " steps." }, None => "the goal room cannot be reached." }
+            }
+            @if let Some(svg) = svg { div.maze-svg { (PreEscaped(svg)) } }
+            p { a href={ "/api/mazes/" (m.maze_id) } { "Layout (JSON)" } }
+        }
+        h2 { "Recent matches" }
+        (match_table(recent))
+    };
+    page(&m.name, body)
+}
+
+/// A match's page.
+#[derive(Debug, Clone)]
+pub struct MatchPage<'a> {
+    /// The match, names and reason.
+    pub line: MatchLine,
+    /// The viewer's data, when the visitor may see the replay (not on hidden mazes).
+    pub viewer: Option<ViewerData<'a>>,
+}
+
+/// A match's page: its result, and the replay viewer.
+pub fn match_page(p: &MatchPage<'_>) -> String {
+    let r = &p.line.row;
+    let title = format!("Match {}", r.match_id);
+    let body = html! {
+        h1 { (title) ": " (p.line.bot) " on " (p.line.maze) }
+        div.cards {
+            div.card { "status" b { (status(&r.status)) } }
+            div.card { "score" b { @if r.status == "finished" { (score(r.score)) } @else { "-" } } }
+            div.card { "run 0 / run 1 steps" b { (opt(r.run0_steps)) " / " (opt(r.run1_steps)) } }
+            div.card { "seed" b { (r.seed) } }
+            @if let Some(t) = r.tournament_id {
+                div.card { "tournament" b { a href={ "/tournaments/" (t) } { (t) } } }
+            }
+        }
+        @if let Some(reason) = &p.line.reason { p { strong { "Reason: " } (reason) } }
+        p {
+            a href={ "/bots/" (r.bot_id) } { "bot " (p.line.bot) } " · "
+            a href={ "/mazes/" (r.maze_id) } { "maze " (p.line.maze) } " · "
+            a href={ "/api/matches/" (r.match_id) } { "JSON" }
+        }
+        @match &p.viewer {
+            Some(data) => (embed(data)),
+            None => {
+                @if r.maze_hidden {
+                    p.muted { "Played on a hidden ranking maze: its replay is not shown." }
+                } @else {
+                    p.muted { "Not played yet." }
+                }
+            }
+        }
+    };
+    page(&title, body)
+}
+
+/// A tournament's page.
+#[derive(Debug, Clone)]
+pub struct TournamentPage {
+    /// The tournament.
+    pub tournament: TournamentRow,
+    /// Its standings.
+    pub standings: StandingsSection,
+    /// Bot names (columns of the table are mazes, rows bots).
+    pub bots: Vec<(i64, String)>,
+    /// Maze ids and names.
+    pub mazes: Vec<(i64, String)>,
+    /// Per (bot, maze): mean score over finished matches, played, finished, first
+    /// match id.
+    pub cells: std::collections::BTreeMap<(i64, i64), Cell>,
+}
+
+/// One bot x maze cell of a tournament.
+#[derive(Debug, Clone, Default)]
+pub struct Cell {
+    /// Matches played (final).
+    pub played: i64,
+    /// Matches finished.
+    pub finished: i64,
+    /// Sum of finished scores.
+    pub score_sum: f64,
+    /// A match to link to (the first failed one if any, else the first).
+    pub link: Option<i64>,
+    /// Matches in all.
+    pub total: i64,
+}
+
+/// A tournament's page: progress (updated live by polling the API), standings, and
+/// the bot x maze table.
+pub fn tournament(p: &TournamentPage) -> String {
+    let t = &p.tournament;
+    let pct = if t.total > 0 {
+        t.done * 100 / t.total
+    } else {
+        100
+    };
+    let body = html! {
+        h1 { (t.name) }
+        p.lead { "Tournament " (t.tournament_id) ", created " (time(t.created_at)) ", " (t.repeats) " repeat(s) of every bot on every maze." }
+        div #progress data-tournament=(t.tournament_id) data-done=(t.done) data-total=(t.total) {
+            div.progress { div #progress-bar style={ "width:" (pct) "%" } {} }
+            p #progress-text { (t.done) " of " (t.total) " matches played" }
+        }
+        h2 { "Standings" }
+        (standings_table(&p.standings))
+        h2 { "Bot x maze" }
+        p.muted { "Mean score of the finished matches, and how many finished; a cell links to one of its matches (a failed one first)." }
+        table.data.grid {
+            thead { tr { th { "bot" } @for (id, name) in &p.mazes { th { a href={ "/mazes/" (id) } { (name) } } } } }
+            tbody {
+                @for (bot_id, bot) in &p.bots {
+                    tr {
+                        td { a href={ "/bots/" (bot_id) } { (bot) } }
+                        @for (maze_id, _) in &p.mazes {
+                            @let c = p.cells.get(&(*bot_id, *maze_id)).cloned().unwrap_or_default();
+                            td.num {
+                                @if c.finished > 0 { (format!("{:.3}", c.score_sum / c.finished as f64)) } @else if c.played > 0 { "DNF" } @else { span.muted { "…" } }
+                                br;
+                                span.muted { (c.finished) "/" (c.total) }
+                                @if let Some(id) = c.link { " " a href={ "/matches/" (id) } { "#" (id) } }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        p { a href={ "/matches?tournament_id=" (t.tournament_id) } { "Every match" } }
+        script { (PreEscaped(PROGRESS_JS)) }
+    };
+    page(&t.name, body)
+}
+
+/// Live progress: polls the tournament's JSON until it is complete.
+const PROGRESS_JS: &str = include_str!("../assets/progress.js");

@@ -1,0 +1,162 @@
+//! The list pages: tournaments, mazes, bots, matches (paged by links).
+
+use maud::{Markup, html};
+
+use super::super::layout::{page, score, status, time};
+use super::board::{maze_table, tournament_table};
+use crate::storage::bots::BotRow;
+use crate::storage::matches::MatchRow;
+use crate::storage::mazes::MazeRow;
+use crate::storage::tournaments::TournamentRow;
+
+/// A list page of tournaments.
+pub fn tournaments(rows: &[TournamentRow], pager: &Pager) -> String {
+    page(
+        "Tournaments",
+        html! { h1 { "Tournaments" } (tournament_table(rows)) (pager.links()) },
+    )
+}
+
+/// A list page of mazes.
+pub fn mazes(rows: &[MazeRow]) -> String {
+    page("Mazes", html! { h1 { "Mazes" } (maze_table(rows)) })
+}
+
+/// A list page of bots.
+pub fn bots(rows: &[BotRow]) -> String {
+    page(
+        "Bots",
+        html! {
+            h1 { "Bots" }
+            @if rows.is_empty() { p.muted { "No bot yet." } } @else {
+                table.data.bots {
+                    thead { tr { th.num { "id" } th { "name" } th.num { "version" } th { "state" } th { "registered" } } }
+                    tbody {
+                        @for b in rows {
+                            tr {
+                                td.num { (b.bot_id) }
+                                td { a href={ "/bots/" (b.bot_id) } { (b.name) } }
+                                td.num { (b.version) }
+                                td { @if b.is_paused() { (status("paused")) } @else { (status(&b.build_status)) } }
+                                td { (time(b.created_at)) }
+                            }
+                        }
+                    }
+                }
+            }
+        },
+    )
+}
+
+/// Links to the previous and next page of a list.
+#[derive(Debug, Clone)]
+pub struct Pager {
+    /// The list's path and query without `offset`, e.g. `/matches?bot_id=2`.
+    pub base: String,
+    /// This page's offset.
+    pub offset: i64,
+    /// Rows per page.
+    pub limit: i64,
+    /// Rows in all.
+    pub total: i64,
+}
+
+impl Pager {
+    fn href(&self, offset: i64) -> String {
+        let sep = if self.base.contains('?') { '&' } else { '?' };
+        format!("{}{sep}offset={offset}&limit={}", self.base, self.limit)
+    }
+
+    /// The links.
+    pub fn links(&self) -> Markup {
+        let shown_to = (self.offset + self.limit).min(self.total);
+        html! {
+            div.pager {
+                span.muted { (self.offset.min(self.total)) "–" (shown_to) " of " (self.total) }
+                @if self.offset > 0 {
+                    a rel="prev" href=(self.href((self.offset - self.limit).max(0))) { "← newer" }
+                }
+                @if shown_to < self.total {
+                    a rel="next" href=(self.href(shown_to)) { "older →" }
+                }
+            }
+        }
+    }
+}
+
+/// A match in a list, with the names to show and what may be said of its failure.
+#[derive(Debug, Clone)]
+pub struct MatchLine {
+    /// The stored match.
+    pub row: MatchRow,
+    /// Its bot's name.
+    pub bot: String,
+    /// Its maze's name.
+    pub maze: String,
+    /// The failure's reason as the visitor may see it (hidden mazes: the step only).
+    pub reason: Option<String>,
+}
+
+/// A table of matches.
+pub fn match_table(lines: &[MatchLine]) -> Markup {
+    html! {
+        @if lines.is_empty() { p.muted { "No match." } } @else {
+            table.data.matches {
+                thead { tr {
+                    th.num { "match" } th { "bot" } th { "maze" } th.num { "seed" } th { "status" }
+                    th.num { "score" } th.num { "run 0" } th.num { "run 1" } th { "reason" }
+                } }
+                tbody {
+                    @for l in lines {
+                        tr {
+                            td.num { a href={ "/matches/" (l.row.match_id) } { (l.row.match_id) } }
+                            td { a href={ "/bots/" (l.row.bot_id) } { (l.bot) } span.muted { " v" (l.row.version) } }
+                            td { a href={ "/mazes/" (l.row.maze_id) } { (l.maze) } }
+                            td.num { (l.row.seed) }
+                            td { (status(&l.row.status)) }
+                            td.num { @if l.row.status == "finished" { (score(l.row.score)) } @else { span.muted { "-" } } }
+                            td.num { (opt(l.row.run0_steps)) }
+                            td.num { (opt(l.row.run1_steps)) }
+                            td.reason { @if let Some(r) = &l.reason { (r) } }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+pub(super) fn opt(v: Option<i64>) -> Markup {
+    html! { @match v { Some(v) => (v), None => span.muted { "-" } } }
+}
+
+/// The list of matches, with its filters.
+pub fn matches(lines: &[MatchLine], filters: &str, pager: &Pager) -> String {
+    page(
+        "Matches",
+        html! {
+            h1 { "Matches" }
+            @if !filters.is_empty() { p.lead { (filters) } }
+            (match_table(lines))
+            (pager.links())
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pager_links_move_by_pages() {
+        let p = Pager {
+            base: "/matches?bot_id=2".into(),
+            offset: 50,
+            limit: 50,
+            total: 120,
+        };
+        let html = p.links().into_string();
+        assert!(html.contains("/matches?bot_id=2&amp;offset=0&amp;limit=50"));
+        assert!(html.contains("/matches?bot_id=2&amp;offset=100&amp;limit=50"));
+    }
+}

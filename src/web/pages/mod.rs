@@ -1,0 +1,14 @@
+//! The server's pages: leaderboard, bots, mazes, matches, tournaments. Each function
+//! takes what the page shows (already filtered for what an anonymous visitor may see:
+//! `api::pages` applies the hidden-maze rules) and returns the whole page.
+//!
+//! Lists are plain HTML tables with links (sorting and paging are links too), so they
+//! work without JavaScript; scripts only add live progress and the owner's logs.
+
+mod board;
+mod detail;
+mod lists;
+
+pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
+pub use detail::{BotPage, Cell, MatchPage, TournamentPage, bot, match_page, maze, tournament};
+pub use lists::{MatchLine, Pager, bots, match_table, matches, mazes, tournaments};
