@@ -13,6 +13,7 @@
 #include <fcntl.h>
 #include <limits.h>
 #include <signal.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -500,6 +501,397 @@ bad:
 }
 
 /* ------------------------------------------------------------------------ */
+/* Debug drawing: a bounded JSON writer and the mb_debug builder.            */
+
+typedef struct writer {
+    char *p;
+    size_t cap; /* bytes available at p */
+    size_t len;
+    int full;   /* something did not fit: the text is incomplete */
+} writer;
+
+static void w_raw(writer *w, const char *s, size_t n)
+{
+    if (w->full || n > w->cap - w->len) {
+        w->full = 1;
+        return;
+    }
+    memcpy(w->p + w->len, s, n);
+    w->len += n;
+}
+
+static void w_str(writer *w, const char *s)
+{
+    w_raw(w, s, strlen(s));
+}
+
+static void w_long(writer *w, long v)
+{
+    char b[32];
+    int n = snprintf(b, sizeof b, "%ld", v);
+    w_raw(w, b, (size_t)n);
+}
+
+/* The length of the valid UTF-8 sequence at s (NUL-terminated), or 0. */
+static size_t utf8_len(const unsigned char *s)
+{
+    unsigned char c = s[0];
+    unsigned char lo = 0x80, hi = 0xBF;
+    size_t n;
+    if (c < 0x80)
+        return 1;
+    if (c >= 0xC2 && c <= 0xDF)
+        n = 2;
+    else if (c >= 0xE0 && c <= 0xEF) {
+        n = 3;
+        if (c == 0xE0)
+            lo = 0xA0; /* no overlong forms */
+        if (c == 0xED)
+            hi = 0x9F; /* no surrogates */
+    } else if (c >= 0xF0 && c <= 0xF4) {
+        n = 4;
+        if (c == 0xF0)
+            lo = 0x90;
+        if (c == 0xF4)
+            hi = 0x8F; /* nothing above U+10FFFF */
+    } else
+        return 0;
+    if (s[1] < lo || s[1] > hi)
+        return 0;
+    for (size_t i = 2; i < n; i++)
+        if (s[i] < 0x80 || s[i] > 0xBF)
+            return 0;
+    return n;
+}
+
+/* Writes s as a JSON string: quotes, backslashes and control characters
+ * escaped, bytes that are not UTF-8 replaced by U+FFFD. */
+static void w_json_string(writer *w, const char *s)
+{
+    const unsigned char *u = (const unsigned char *)s;
+    w_raw(w, "\"", 1);
+    while (*u != 0) {
+        size_t n = utf8_len(u);
+        if (n == 0) {
+            w_str(w, "\\ufffd");
+            u++;
+        } else if (n > 1) {
+            w_raw(w, (const char *)u, n);
+            u += n;
+        } else {
+            char esc[8];
+            switch (*u) {
+            case '"': w_str(w, "\\\""); break;
+            case '\\': w_str(w, "\\\\"); break;
+            case '\n': w_str(w, "\\n"); break;
+            case '\r': w_str(w, "\\r"); break;
+            case '\t': w_str(w, "\\t"); break;
+            default:
+                if (*u < 0x20 || *u == 0x7F) {
+                    snprintf(esc, sizeof esc, "\\u%04x", (unsigned)*u);
+                    w_str(w, esc);
+                } else {
+                    w_raw(w, (const char *)u, 1);
+                }
+            }
+            u++;
+        }
+    }
+    w_raw(w, "\"", 1);
+}
+
+static const char *const debug_keys[7] = {"", "text", "walls", "cells", "grid", "colors", "path"};
+
+/* Fields sent as a list of items (the others hold one JSON value each). */
+static int is_list(int field)
+{
+    return field == MB_DEBUG_WALLS || field == MB_DEBUG_CELLS || field == MB_DEBUG_COLORS;
+}
+
+/* The size of the object's JSON with these field sizes. */
+static unsigned long debug_size(const unsigned long *bytes, const int *count)
+{
+    unsigned long n = 2;
+    int fields = 0;
+    for (int f = 1; f <= 6; f++) {
+        if (count[f] < 0)
+            continue;
+        fields++;
+        n += strlen(debug_keys[f]) + 3 + bytes[f]; /* "key": */
+        if (is_list(f))
+            n += 2 + (count[f] > 0 ? (unsigned long)count[f] - 1 : 0);
+    }
+    return n + (fields > 1 ? (unsigned long)fields - 1 : 0);
+}
+
+void mb_debug_clear(mb_debug *d)
+{
+    d->used = 0;
+    d->dropped = 0;
+    for (int f = 0; f < 7; f++) {
+        d->field_bytes[f] = 0;
+        d->field_count[f] = -1;
+    }
+    d->json[0] = '\0';
+}
+
+/* A writer for a new item at the end of d->items (room kept for its tag and NUL). */
+static writer item_begin(mb_debug *d)
+{
+    writer w;
+    size_t room = sizeof d->items - d->used;
+    w.p = d->items + d->used + 1;
+    w.cap = room >= 2 ? room - 2 : 0;
+    w.len = 0;
+    w.full = room < 2;
+    return w;
+}
+
+/* Keeps the item written with w as one of field's items (for a one-value
+ * field, instead of its earlier value), if the object stays within
+ * MB_DEBUG_MAX. Returns 0, or -1 (the item is left out). */
+static int item_end(mb_debug *d, int field, const writer *w)
+{
+    unsigned long bytes[7];
+    int count[7];
+    memcpy(bytes, d->field_bytes, sizeof bytes);
+    memcpy(count, d->field_count, sizeof count);
+    if (!is_list(field)) {
+        bytes[field] = 0;
+        count[field] = 0;
+    }
+    bytes[field] += w->len;
+    count[field] = (count[field] < 0 ? 0 : count[field]) + 1;
+    if (w->full || debug_size(bytes, count) > MB_DEBUG_MAX) {
+        d->dropped++;
+        return -1;
+    }
+    if (!is_list(field)) { /* the earlier value is dead */
+        for (unsigned long i = 0; i < d->used; i += strlen(d->items + i + 1) + 2)
+            if (d->items[i] == (char)field)
+                d->items[i] = 0;
+    }
+    d->items[d->used] = (char)field;
+    d->items[d->used + 1 + w->len] = '\0';
+    d->used += w->len + 2;
+    memcpy(d->field_bytes, bytes, sizeof bytes);
+    memcpy(d->field_count, count, sizeof count);
+    return 0;
+}
+
+int mb_debug_text(mb_debug *d, const char *fmt, ...)
+{
+    char text[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    writer w = item_begin(d);
+    w_json_string(&w, text);
+    return item_end(d, MB_DEBUG_TEXT, &w);
+}
+
+static void w_cell(writer *w, int x, int y)
+{
+    w_raw(w, "[", 1);
+    w_long(w, x);
+    w_raw(w, ",", 1);
+    w_long(w, y);
+}
+
+int mb_debug_wall(mb_debug *d, int x, int y, int side)
+{
+    static const char *const names[4] = {",\"up\"]", ",\"right\"]", ",\"down\"]", ",\"left\"]"};
+    if (side < 0 || side > 3) {
+        d->dropped++;
+        return -1;
+    }
+    writer w = item_begin(d);
+    w_cell(&w, x, y);
+    w_str(&w, names[side]);
+    return item_end(d, MB_DEBUG_WALLS, &w);
+}
+
+int mb_debug_cell_int(mb_debug *d, int x, int y, long value)
+{
+    writer w = item_begin(d);
+    w_cell(&w, x, y);
+    w_raw(&w, ",", 1);
+    w_long(&w, value);
+    w_raw(&w, "]", 1);
+    return item_end(d, MB_DEBUG_CELLS, &w);
+}
+
+int mb_debug_cell_text(mb_debug *d, int x, int y, const char *text)
+{
+    writer w = item_begin(d);
+    w_cell(&w, x, y);
+    w_raw(&w, ",", 1);
+    w_json_string(&w, text != NULL ? text : "");
+    w_raw(&w, "]", 1);
+    return item_end(d, MB_DEBUG_CELLS, &w);
+}
+
+int mb_debug_grid(mb_debug *d, int n, const int *values, int null_value)
+{
+    if (n < 0 || (n > 0 && values == NULL)) {
+        d->dropped++;
+        return -1;
+    }
+    writer w = item_begin(d);
+    w_raw(&w, "[", 1);
+    for (int x = 0; x < n && !w.full; x++) {
+        w_str(&w, x == 0 ? "[" : ",[");
+        for (int y = 0; y < n; y++) {
+            int v = values[(size_t)x * (size_t)n + (size_t)y];
+            if (y > 0)
+                w_raw(&w, ",", 1);
+            if (v == null_value)
+                w_str(&w, "null");
+            else
+                w_long(&w, v);
+        }
+        w_raw(&w, "]", 1);
+    }
+    w_raw(&w, "]", 1);
+    return item_end(d, MB_DEBUG_GRID, &w);
+}
+
+int mb_debug_color(mb_debug *d, int x, int y, const char *hex)
+{
+    size_t n = hex != NULL ? strlen(hex) : 0;
+    int ok = (n == 4 || n == 7) && hex[0] == '#';
+    for (size_t i = 1; ok && i < n; i++) {
+        char c = hex[i];
+        ok = (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
+    }
+    if (!ok) {
+        d->dropped++;
+        return -1;
+    }
+    writer w = item_begin(d);
+    w_cell(&w, x, y);
+    w_str(&w, ",\"");
+    w_str(&w, hex);
+    w_str(&w, "\"]");
+    return item_end(d, MB_DEBUG_COLORS, &w);
+}
+
+int mb_debug_path(mb_debug *d, int count, const int *xy)
+{
+    if (count < 0 || (count > 0 && xy == NULL)) {
+        d->dropped++;
+        return -1;
+    }
+    writer w = item_begin(d);
+    w_raw(&w, "[", 1);
+    for (int i = 0; i < count && !w.full; i++) {
+        if (i > 0)
+            w_raw(&w, ",", 1);
+        w_cell(&w, xy[2 * i], xy[2 * i + 1]);
+        w_raw(&w, "]", 1);
+    }
+    w_raw(&w, "]", 1);
+    return item_end(d, MB_DEBUG_PATH, &w);
+}
+
+int mb_debug_empty(mb_debug *d, enum mb_debug_field field)
+{
+    int f = (int)field;
+    if (f < MB_DEBUG_TEXT || f > MB_DEBUG_PATH) {
+        d->dropped++;
+        return -1;
+    }
+    if (!is_list(f)) {
+        writer w = item_begin(d);
+        w_str(&w, f == MB_DEBUG_TEXT ? "\"\"" : "[]");
+        return item_end(d, f, &w);
+    }
+    unsigned long bytes[7];
+    int count[7];
+    memcpy(bytes, d->field_bytes, sizeof bytes);
+    memcpy(count, d->field_count, sizeof count);
+    bytes[f] = 0;
+    count[f] = 0;
+    if (debug_size(bytes, count) > MB_DEBUG_MAX) {
+        d->dropped++;
+        return -1;
+    }
+    for (unsigned long i = 0; i < d->used; i += strlen(d->items + i + 1) + 2)
+        if (d->items[i] == (char)f)
+            d->items[i] = 0;
+    d->field_bytes[f] = 0;
+    d->field_count[f] = 0;
+    return 0;
+}
+
+const char *mb_debug_json(mb_debug *d)
+{
+    writer w = {d->json, sizeof d->json - 1, 0, 0};
+    int fields = 0;
+    for (int f = 1; f <= 6; f++) {
+        int items = 0;
+        if (d->field_count[f] < 0)
+            continue;
+        w_str(&w, fields++ > 0 ? ",\"" : "{\"");
+        w_str(&w, debug_keys[f]);
+        w_str(&w, "\":");
+        if (is_list(f))
+            w_raw(&w, "[", 1);
+        for (unsigned long i = 0; i < d->used; i += strlen(d->items + i + 1) + 2) {
+            if (d->items[i] != (char)f)
+                continue;
+            if (items++ > 0)
+                w_raw(&w, ",", 1);
+            w_str(&w, d->items + i + 1);
+        }
+        if (is_list(f))
+            w_raw(&w, "]", 1);
+    }
+    if (fields == 0 || w.full) /* full: cannot happen, the items are kept within bounds */
+        return NULL;
+    w_raw(&w, "}", 1);
+    d->json[w.len] = '\0';
+    return d->json;
+}
+
+/* The debug object's text to send with the answer being returned, if any. */
+static const char *pending_debug;
+
+mb_answer mb_with_debug(mb_answer a, mb_debug *d)
+{
+    pending_debug = d != NULL ? mb_debug_json(d) : NULL;
+    return a;
+}
+
+mb_answer mb_with_debug_json(mb_answer a, const char *json)
+{
+    pending_debug = json;
+    return a;
+}
+
+/* Why `json` cannot be sent as a debug object, or NULL if it can. */
+static const char *debug_problem(const char *json, size_t len)
+{
+    reader r = {json, json + len, NULL};
+    for (const unsigned char *u = (const unsigned char *)json; *u != 0;) {
+        size_t n = utf8_len(u);
+        if (n == 0)
+            return "not UTF-8";
+        u += n;
+    }
+    skip_ws(&r);
+    if (peek(&r) != '{')
+        return "not a JSON object";
+    if (skip_value(&r, 0) != 0)
+        return r.why != NULL ? r.why : "bad JSON";
+    skip_ws(&r);
+    if (r.p != r.end)
+        return "text after the JSON object";
+    return NULL;
+}
+
+/* ------------------------------------------------------------------------ */
 /* The conversation.                                                         */
 
 /* Private copies of the real stdin/stdout; fd 0 -> /dev/null, fd 1 -> stderr. */
@@ -556,6 +948,8 @@ int mb_run(const mb_bot *bot)
     FILE *in, *out;
     char *line;
     int status = 0;
+    unsigned long debug_sent = 0;
+    int warned_bad = 0, warned_step = 0, warned_match = 0;
 
     if (bot == NULL || bot->next_move == NULL) {
         fprintf(stderr, "mazebot: mb_run needs a bot with a next_move callback\n");
@@ -605,11 +999,44 @@ int mb_run(const mb_bot *bot)
             if (bot->start != NULL)
                 bot->start(bot->user, &msg.start);
         } else if (msg.type == MB_MSG_SENSE) {
+            const char *debug, *problem;
+            size_t debug_len;
+            pending_debug = NULL;
             mb_answer a = bot->next_move(bot->user, msg.sensors, msg.run, msg.step);
+            debug = pending_debug;
+            pending_debug = NULL;
+            if (debug != NULL) {
+                debug_len = strlen(debug);
+                if (debug_len > MB_DEBUG_MAX) {
+                    if (!warned_step++)
+                        fprintf(stderr, "mazebot: step %d: debug object of %lu bytes, over %d: not sent\n",
+                                msg.step, (unsigned long)debug_len, MB_DEBUG_MAX);
+                    debug = NULL;
+                } else if ((problem = debug_problem(debug, debug_len)) != NULL) {
+                    if (!warned_bad++)
+                        fprintf(stderr, "mazebot: step %d: debug object not sent (%s)\n", msg.step,
+                                problem);
+                    debug = NULL;
+                } else if (debug_sent + debug_len > MB_DEBUG_MATCH_MAX) {
+                    if (!warned_match++)
+                        fprintf(stderr,
+                                "mazebot: step %d: the match's debug objects reached %d bytes: "
+                                "no more are sent\n",
+                                msg.step, MB_DEBUG_MATCH_MAX);
+                    debug = NULL;
+                } else {
+                    debug_sent += debug_len;
+                }
+            }
             if (a.reset)
-                fputs("{\"reset\":true}\n", out);
+                fputs("{\"reset\":true", out);
             else
-                fprintf(out, "{\"rotation\":%d,\"movement\":%d}\n", a.rotation, a.movement);
+                fprintf(out, "{\"rotation\":%d,\"movement\":%d", a.rotation, a.movement);
+            if (debug != NULL) {
+                fputs(",\"debug\":", out);
+                fputs(debug, out);
+            }
+            fputs("}\n", out);
             if (fflush(out) != 0 || ferror(out))
                 break; /* the server stopped listening: nothing left to do */
         } else if (msg.type == MB_MSG_END) {

@@ -24,6 +24,11 @@
  *
  * If the goal cannot be reached (the map proves it walled off), the bot turns
  * on the spot until the step limit: it never crashes and never hits a wall.
+ *
+ * Debug drawing: each answer carries an mb_debug for the replay viewer (the
+ * flood-fill distances as a grid, the way down them to the goal as a path, a
+ * line of text, and the walls it knows whenever it learnt a new one). It
+ * changes nothing in the moves.
  */
 #include "mazebot.h"
 #include "mazemap.h"
@@ -44,6 +49,10 @@ typedef struct bot {
     mm_pose pose;         /* where the robot is (dead reckoning) */
     int run;
     int entered_goal;
+    int flooded;          /* dist holds this step's flood fill (run 0) */
+    int walls_drawn;      /* walls in the last debug drawing that listed them */
+    int *path;            /* debug drawing: x, y of each cell of the path */
+    mb_debug debug;       /* the debug drawing being built */
 } bot_state;
 
 /* --- run 0: flood fill, unknown = open ------------------------------------ */
@@ -82,6 +91,7 @@ static mb_answer explore_move(bot_state *b)
     int here, rel = -1, d = 0;
 
     flood(b);
+    b->flooded = 1;
     here = b->dist[mm_cell(map, b->pose.x, b->pose.y)];
     if (here == INF)
         return mb_move(90, 0); /* the goal is walled off: turn on the spot */
@@ -173,6 +183,56 @@ static int plan_move(bot_state *b, mb_answer *out)
     return 0;
 }
 
+/* --- debug drawing (the replay viewer's layer; no effect on the moves) ------- */
+
+/* Builds b->debug for this step: text, the walls if they changed, and in run 0
+ * the flood fill as a grid and the way down it from the robot's cell. */
+static void draw(bot_state *b, const char *text)
+{
+    const mm_map *map = &b->map;
+    int n = map->n, walls = 0;
+    mb_debug *d = &b->debug;
+
+    mb_debug_clear(d);
+    mb_debug_text(d, "%s", text);
+    for (int x = 0; x < n; x++)
+        for (int y = 0; y < n; y++)
+            walls += (y + 1 < n && mm_edge(map, x, y, MM_UP) == MM_WALL) +
+                     (x + 1 < n && mm_edge(map, x, y, MM_RIGHT) == MM_WALL);
+    if (walls != b->walls_drawn) { /* fields are sticky: send the walls when they change */
+        b->walls_drawn = walls;
+        mb_debug_empty(d, MB_DEBUG_WALLS); /* the field, even with no wall yet */
+        for (int x = 0; x < n; x++)
+            for (int y = 0; y < n; y++) {
+                if (y + 1 < n && mm_edge(map, x, y, MM_UP) == MM_WALL)
+                    mb_debug_wall(d, x, y, MB_SIDE_UP);
+                if (x + 1 < n && mm_edge(map, x, y, MM_RIGHT) == MM_WALL)
+                    mb_debug_wall(d, x, y, MB_SIDE_RIGHT);
+            }
+    }
+    if (!b->flooded)
+        return;
+    mb_debug_grid(d, n, b->dist, INF);
+    int count = 0, x = b->pose.x, y = b->pose.y;
+    while (count < n * n && b->dist[mm_cell(map, x, y)] != INF) {
+        int here = b->dist[mm_cell(map, x, y)], next = -1;
+        b->path[2 * count] = x;
+        b->path[2 * count + 1] = y;
+        count++;
+        for (int dd = 0; dd < 4 && here > 0 && next < 0; dd++) {
+            int nx = x + MM_DX[dd], ny = y + MM_DY[dd];
+            if (mm_edge(map, x, y, dd) != MM_WALL && mm_inside(map, nx, ny) &&
+                b->dist[mm_cell(map, nx, ny)] == here - 1)
+                next = dd;
+        }
+        if (next < 0)
+            break;
+        x += MM_DX[next];
+        y += MM_DY[next];
+    }
+    mb_debug_path(d, count, b->path);
+}
+
 /* --- the bot interface ------------------------------------------------------ */
 
 static void home(bot_state *b)
@@ -187,13 +247,15 @@ static void start(void *user, const mb_start_info *info)
     bot_state *b = user;
     int n = info->maze_dim;
     memset(b, 0, sizeof *b);
+    b->walls_drawn = -1; /* the first drawing lists the walls, even none */
     if (n >= 2 && n <= MAX_DIM) {
         size_t cells = (size_t)n * (size_t)n;
         b->dist = malloc(cells * sizeof *b->dist);
         b->queue = malloc(cells * 4 * sizeof *b->queue);
         b->parent = malloc(cells * 4 * sizeof *b->parent);
         b->act = malloc(cells * 4 * 2);
-        if (!(b->dist && b->queue && b->parent && b->act && mm_map_init(&b->map, n)))
+        b->path = malloc(cells * 2 * sizeof *b->path);
+        if (!(b->dist && b->queue && b->parent && b->act && b->path && mm_map_init(&b->map, n)))
             fprintf(stderr, "minimal_bot: out of memory for a %dx%d maze\n", n, n);
     } else {
         fprintf(stderr, "minimal_bot: cannot map a %dx%d maze; turning on the spot\n", n, n);
@@ -213,14 +275,20 @@ static mb_answer next_move(void *user, const int sensors[3], int run, int step)
         home(b);
     }
     mm_sense(&b->map, &b->pose, sensors);
-    if (run == 0 && b->entered_goal)
-        return mb_reset();
+    b->flooded = 0;
+    if (run == 0 && b->entered_goal) {
+        draw(b, "goal room entered: reset");
+        mb_debug_empty(&b->debug, MB_DEBUG_GRID); /* clear the run-0 drawing */
+        mb_debug_empty(&b->debug, MB_DEBUG_PATH);
+        return mb_with_debug(mb_reset(), &b->debug);
+    }
     if (run != 1 || !plan_move(b, &a))
         a = explore_move(b);
+    draw(b, run == 1 ? "run 1: shortest known path" : "run 0: flood fill, unknown = open");
     mm_apply(&b->pose, a); /* exact: moves only cross edges known to be open */
     if (run == 0 && mm_in_goal(&b->map, b->pose.x, b->pose.y))
         b->entered_goal = 1;
-    return a;
+    return mb_with_debug(a, &b->debug);
 }
 
 static void end(void *user, const mb_end_info *info)

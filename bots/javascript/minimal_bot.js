@@ -22,6 +22,11 @@
  *
  * It explores only until it first reaches the goal, so its run-1 path can be
  * longer than the optimum: a baseline, not a contender.
+ *
+ * Debug drawing: each answer carries a mazebot.Debug for the replay viewer (the
+ * flood-fill distances as a grid, the way down them to the goal as a path, a line
+ * of text, and the walls it knows whenever it learnt a new one). It changes nothing
+ * in the moves.
  */
 
 const path = require('path');
@@ -48,6 +53,8 @@ class MinimalBot {
     this.home();
     this.run = 0;
     this.enteredGoal = false;
+    this.dist = null; // the last flood fill (run 0), for the debug drawing
+    this.wallsSent = -1; // how many walls the last debug drawing listed
   }
 
   home() {
@@ -113,7 +120,7 @@ class MinimalBot {
 
   exploreMove() {
     const n = this.n;
-    const dist = this.flood();
+    const dist = (this.dist = this.flood());
     const here = dist[this.x * n + this.y];
     if (here < 0) return { rotation: 90, movement: 0, note: 'goal unreachable' };
     let rel = -1, d = -1;
@@ -197,12 +204,52 @@ class MinimalBot {
       this.home();
     }
     this.sense(sensors);
-    if (run === 0 && this.enteredGoal) return mazebot.RESET;
+    if (run === 0 && this.enteredGoal) {
+      // clear the run-0 drawing: run 1 follows the known map only
+      return mazebot.reset(this.debug('goal room entered: reset').grid([]).path([]));
+    }
     let move = run === 1 ? this.planMove() : null;
     if (move === null) move = this.exploreMove();
+    const text = run === 1 ? 'run 1: shortest known path' : 'run 0: flood fill, unknown = open';
+    move.debug = this.debug(text, run === 0 ? this.dist : null);
     this.apply(move.rotation, move.movement);
     if (run === 0 && this.isGoal(this.x, this.y)) this.enteredGoal = true;
     return move;
+  }
+
+  // --- debug drawing (the replay viewer's layer; no effect on the moves) ---------
+  debug(text, dist = null) {
+    const n = this.n;
+    const dbg = new mazebot.Debug().text(text);
+    const walls = [];
+    for (let x = 0; x < n; x++) {
+      for (let y = 0; y < n; y++) {
+        if (y + 1 < n && this.edge(x, y, UP) === WALL) walls.push([x, y, UP]);
+        if (x + 1 < n && this.edge(x, y, RIGHT) === WALL) walls.push([x, y, RIGHT]);
+      }
+    }
+    if (walls.length !== this.wallsSent) {
+      // fields are sticky: send the walls only when they change
+      this.wallsSent = walls.length;
+      dbg.walls(walls);
+    }
+    if (dist !== null) {
+      const at = (x, y) => (this.inside(x, y) ? dist[x * n + y] : -1);
+      dbg.grid(Array.from({ length: n }, (_, x) => Array.from({ length: n }, (_, y) => (at(x, y) >= 0 ? at(x, y) : null))));
+      // the way down the distances from the robot's cell to the goal room
+      const path = [];
+      let x = this.x, y = this.y;
+      while (at(x, y) >= 0) {
+        path.push([x, y]);
+        if (at(x, y) === 0) break;
+        const d = [0, 1, 2, 3].find((k) => this.edge(x, y, k) !== WALL && at(x + DX[k], y + DY[k]) === at(x, y) - 1);
+        if (d === undefined) break;
+        x += DX[d];
+        y += DY[d];
+      }
+      dbg.path(path);
+    }
+    return dbg;
   }
 
   /** Dead reckoning; exact because moves only cross edges known to be open. */

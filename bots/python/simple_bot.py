@@ -21,6 +21,11 @@ Strategy
 
 It explores only until it first reaches the goal, so its run-1 path can be
 longer than the optimum; it is a baseline, not a contender.
+
+Debug drawing: each answer carries a ``mazebot.Debug`` for the replay viewer
+(the flood-fill distances as a grid, the way down them to the goal as a path,
+a line of text, and the walls it knows whenever it learnt a new one). It
+changes nothing in the moves.
 """
 
 import os
@@ -51,6 +56,8 @@ class SimpleBot:
         self._home()
         self.run = 0
         self.entered_goal = False  # a step's movement has ended in the goal room (run 0)
+        self.dist = None  # the last flood fill (run 0), for the debug drawing
+        self.walls_sent = -1  # how many walls the last debug drawing listed
 
     def _home(self):
         self.x, self.y, self.heading = 0, 0, UP
@@ -90,7 +97,7 @@ class SimpleBot:
         return dist
 
     def _explore_move(self):
-        dist = self._flood()
+        dist = self.dist = self._flood()
         if (self.x, self.y) not in dist:
             return 90, 0  # the goal room cannot be reached: turn in place until the end
         here = dist[(self.x, self.y)]
@@ -153,14 +160,41 @@ class SimpleBot:
             self._home()
         self._sense(sensors)
         if run == 0 and self.entered_goal:
-            return mazebot.RESET
+            # clear the run-0 drawing: run 1 follows the known map only
+            return mazebot.reset(debug=self._debug("goal room entered: reset").grid([]).path([]))
         move = self._plan_move() if run == 1 else None
         if move is None:
             move = self._explore_move()
+        text = "run 1: shortest known path" if run == 1 else "run 0: flood fill, unknown = open"
+        debug = self._debug(text, self.dist if run == 0 else None)
         self._apply(*move)
         if run == 0 and (self.x, self.y) in self.goal:
             self.entered_goal = True
-        return move
+        return mazebot.move(move[0], move[1], debug=debug)
+
+    # --- debug drawing (the replay viewer's layer; no effect on the moves) ----
+    def _debug(self, text, dist=None):
+        debug = mazebot.Debug().text(text)
+        walls = [(x, y, d) for x in range(self.n) for y in range(self.n) for d in (UP, RIGHT)
+                 if self.edges[x][y][d] is WALL
+                 and self._inside(x + DELTA[d][0], y + DELTA[d][1])]
+        if len(walls) != self.walls_sent:  # fields are sticky: send the walls when they change
+            self.walls_sent = len(walls)
+            debug.walls(walls)
+        if dist is not None:
+            debug.grid([[dist.get((x, y)) for y in range(self.n)] for x in range(self.n)])
+            # the way down the distances from the robot's cell to the goal room
+            path, (x, y) = [], (self.x, self.y)
+            while (x, y) in dist:
+                path.append((x, y))
+                if dist[(x, y)] == 0:
+                    break
+                x, y = next(((x + DELTA[d][0], y + DELTA[d][1]) for d in range(4)
+                             if self.edges[x][y][d] is not WALL
+                             and dist.get((x + DELTA[d][0], y + DELTA[d][1])) == dist[(x, y)] - 1),
+                            (None, None))
+            debug.path(path)
+        return debug
 
     def _apply(self, rotation, movement):
         """Dead reckoning; exact because moves only cross edges known to be open."""

@@ -1,12 +1,20 @@
 #!/usr/bin/env python
 """Run an unchanged robot.py from the original micromouse task as a mazearena bot.
 
-usage: udacity_adapter.py ROBOT_PY
+usage: udacity_adapter.py ROBOT_PY [ARGS...]
 
 ROBOT_PY is the path of a file defining ``class Robot`` with ``Robot(maze_dim)``
 and ``next_move(sensors) -> (rotation, movement)`` or ``('Reset', 'Reset')``,
 as in the "Plot and Navigate a Virtual Maze" task. This adapter speaks
 protocol v1 (line-delimited JSON on stdin/stdout) on the robot's behalf:
+
+* Arguments: the original tester ran as ``tester.py MAZE [ARGS]``, and some
+  robots read ``sys.argv``. The robot sees ``sys.argv == [ROBOT_PY, "maze",
+  ARGS...]`` (from its import on), so the arguments given after ROBOT_PY
+  reach it as ``sys.argv[2:]``; "maze" stands for the maze file, which a bot
+  never sees. Put them in the bot's command:
+  ``mazearena run --bot 'python3 udacity_adapter.py robot.py --alpha 0.5' ...``
+  gives the robot ``sys.argv[2:] == ['--alpha', '0.5']``.
 
 * The robot's own folder goes first on sys.path, so its sibling imports work
   whatever the current directory is; the file is loaded by path as module
@@ -36,9 +44,11 @@ import random
 import sys
 import traceback
 
-USAGE = "usage: udacity_adapter.py ROBOT_PY\n" \
+USAGE = "usage: udacity_adapter.py ROBOT_PY [ARGS...]\n" \
         "  Runs the original-task robot in ROBOT_PY (class Robot(maze_dim) with\n" \
-        "  next_move(sensors)) as a mazearena protocol-v1 bot on stdin/stdout.\n"
+        "  next_move(sensors)) as a mazearena protocol-v1 bot on stdin/stdout.\n" \
+        "  The robot sees sys.argv = [ROBOT_PY, 'maze', ARGS...], as under the\n" \
+        "  original 'tester.py MAZE ARGS...'.\n"
 
 
 def private_stdio():
@@ -132,13 +142,15 @@ def to_json_line(obj):
 
 
 def main(argv):
-    if len(argv) != 2 or argv[1] in ("-h", "--help"):
+    if len(argv) < 2 or argv[1] in ("-h", "--help"):
         sys.stderr.write(USAGE)
-        return 0 if len(argv) == 2 else 2
+        return 0 if len(argv) >= 2 else 2
     robot_path = argv[1]
     if not os.path.isfile(robot_path):
         sys.stderr.write("udacity_adapter: no such file: %s\n%s" % (robot_path, USAGE))
         return 2
+    # What the robot sees, as under the original "tester.py MAZE ARGS...".
+    sys.argv = [robot_path, "maze"] + list(argv[2:])
 
     proto_in, proto_out = private_stdio()
     robot = None
@@ -184,6 +196,6 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    status = main(sys.argv)
+    status = main(list(sys.argv))
     sys.stderr.flush()
     sys.exit(status)

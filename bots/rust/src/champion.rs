@@ -19,9 +19,16 @@
 //! - Run 1: the proven fewest-step plan.
 //!
 //! Deterministic: no randomness unless [`Params::tie_jitter`] is set (for studies).
+//!
+//! Debug drawing ([`Bot::debug`], for the replay viewer): a line on what it is doing,
+//! the plan it follows as a path, its optimistic step counts to the goal room as a grid
+//! (from the reset on, the proven ones run 1 follows), the cells it wants to look at in
+//! orange, and
+//! the walls it knows whenever it found a new one. Built only when asked for, after the
+//! move is chosen: the moves are the same with or without it.
 
 use crate::map::{Map, Mode, Plan, Pose, STEP_MILLI};
-use crate::protocol::{Answer, Bot, Start};
+use crate::protocol::{Answer, Bot, DebugDraw, Start};
 
 /// The champion's weights.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,6 +63,53 @@ const SAFETY_STEPS: u32 = 20;
 /// below one step, longer than any optimistic plan in a 16x16 maze.
 const JITTER_MILLI: u64 = 25;
 
+/// What a step was about, for the debug drawing.
+#[derive(Debug, Clone, PartialEq)]
+enum Intent {
+    /// Run 0: the optimistic plan toward the goal room.
+    ToGoal,
+    /// Run 0: the best run is proven; touch the goal room, then reset.
+    Touch,
+    /// Run 0, after the goal room: go where the sensors see an unknown edge of the
+    /// likely plan.
+    Look {
+        known: u32,
+        expected: f64,
+        unknown_edges: Vec<(usize, usize, usize)>,
+    },
+    /// Run 0: reset with a proven run of this many steps.
+    Reset(u32),
+    /// Run 1: the proven plan.
+    Run,
+    /// No plan reaches the goal room: turn in place.
+    Stuck,
+}
+
+/// The last step's decision, kept for [`Bot::debug`].
+#[derive(Debug, Clone)]
+struct Trace {
+    run: u8,
+    step: u32,
+    /// Where the plan starts.
+    from: Pose,
+    intent: Intent,
+    plan: Option<Plan>,
+}
+
+/// What the debug drawings sent so far showed (the viewer keeps each field until the
+/// next one), so that big fields are sent only when they change.
+#[derive(Debug, Clone, Default)]
+struct Drawn {
+    /// How many walls.
+    walls: Option<usize>,
+    /// The grid, and what it was computed from: the map's unknown edge count (the map
+    /// only changes by learning an edge) and whether it was the proven one.
+    grid: Option<Vec<Option<u32>>>,
+    grid_from: Option<(usize, bool)>,
+    /// The coloured cells.
+    colors: Vec<(usize, usize)>,
+}
+
 /// The champion bot.
 #[derive(Debug, Clone)]
 pub struct Champion {
@@ -69,6 +123,12 @@ pub struct Champion {
     goal_entered_at: Option<u32>,
     /// Whether to log the goal and the reset on stderr.
     log: bool,
+    /// Whether to send debug drawings.
+    draw: bool,
+    /// The last step's decision, for the debug drawing.
+    trace: Option<Trace>,
+    /// What the debug drawings showed so far.
+    drawn: Drawn,
 }
 
 impl Champion {
@@ -82,12 +142,21 @@ impl Champion {
             max_steps: 1000,
             goal_entered_at: None,
             log: true,
+            draw: true,
+            trace: None,
+            drawn: Drawn::default(),
         }
     }
 
     /// The same champion, without log lines on stderr.
     pub fn quiet(mut self) -> Champion {
         self.log = false;
+        self
+    }
+
+    /// The same champion, without debug drawings ([`Bot::debug`] gives `None`).
+    pub fn without_debug(mut self) -> Champion {
+        self.draw = false;
         self
     }
 
@@ -105,11 +174,11 @@ impl Champion {
         map.plan_weighted(from, |p| map.is_goal(p.x, p.y), mode, safe, unknown_milli)
     }
 
-    /// The first step of the optimistic plan from where the robot stands.
-    fn toward_goal(&self, step: u32) -> Option<(i32, i32)> {
+    /// The optimistic plan from where the robot stands.
+    fn toward_goal(&self, step: u32) -> Option<Plan> {
         let map = &self.belief;
         let w = self.params.unknown_milli;
-        let plan = match self.params.tie_jitter {
+        match self.params.tie_jitter {
             None => self.goal_plan(self.pose, Mode::Optimistic, w, true),
             Some(seed) => {
                 let salt = mix(seed ^ (u64::from(step) << 32));
@@ -126,25 +195,30 @@ impl Champion {
                     },
                 )
             }
-        };
-        plan.and_then(|p| p.actions.first().copied())
+        }
     }
 
-    /// The next step of run 0, or `None` to reset now.
-    fn explore_step(&self, step: u32) -> Option<(i32, i32)> {
+    /// The next step of run 0, or `None` to reset now; with the plan it follows and why.
+    fn explore_step(&self, step: u32) -> Option<(i32, i32, Intent, Option<Plan>)> {
+        let first = |plan: Option<Plan>, intent: Intent| {
+            let (rotation, movement) = plan.as_ref()?.actions.first().copied()?;
+            Some((rotation, movement, intent, plan))
+        };
         let Some(best) = self.goal_plan(Pose::START, Mode::Optimistic, 1, false) else {
             // The goal room cannot be reached: turn in place until the end.
-            return Some((90, 0));
+            return Some((90, 0, Intent::Stuck, None));
         };
         let known = self.goal_plan(Pose::START, Mode::Known, 1, false);
         let optimal_known = known.as_ref().is_some_and(|k| k.steps <= best.steps);
         if self.goal_entered_at.is_none() {
             return if optimal_known {
                 // The best run is proven: go and touch the goal room, then reset.
-                self.goal_plan(self.pose, Mode::Known, 1, false)
-                    .and_then(|p| p.actions.first().copied())
+                first(
+                    self.goal_plan(self.pose, Mode::Known, 1, false),
+                    Intent::Touch,
+                )
             } else {
-                self.toward_goal(step)
+                first(self.toward_goal(step), Intent::ToGoal)
             };
         }
         let known = known?;
@@ -162,7 +236,12 @@ impl Champion {
         let look = self.look(&likely)?;
         let cost = f64::from(look.steps) / 30.0;
         if cost < self.params.gain_weight * gain {
-            look.actions.first().copied()
+            let intent = Intent::Look {
+                known: known.steps,
+                expected,
+                unknown_edges: likely.unknown_edges,
+            };
+            first(Some(look), intent)
         } else {
             None
         }
@@ -197,30 +276,55 @@ impl Bot for Champion {
         self.pose = Pose::START;
         self.max_steps = start.max_steps;
         self.goal_entered_at = None;
+        self.trace = None;
+        self.drawn = Drawn::default();
     }
 
     fn next_move(&mut self, sensors: [u32; 3], run: u8, step: u32) -> Answer {
         self.map.sense(self.pose, sensors);
         self.belief = self.map.with_maze_rules();
-        let action = if run == 0 {
+        let from = self.pose;
+        let (action, intent, plan) = if run == 0 {
             match self.explore_step(step) {
-                Some(a) => Some(a),
+                Some((rotation, movement, intent, plan)) => {
+                    (Some((rotation, movement)), intent, plan)
+                }
                 None if self.goal_entered_at.is_some() => {
-                    let known = self.proven_plan().map_or(0, |p| p.steps);
+                    let proven = self.proven_plan();
+                    let known = proven.as_ref().map_or(0, |p| p.steps);
                     if self.log {
                         eprintln!(
                             "champion: reset at step {step} with a proven run of {known} steps"
                         );
                     }
                     self.pose = Pose::START;
+                    self.trace = Some(Trace {
+                        run,
+                        step,
+                        from: Pose::START,
+                        intent: Intent::Reset(known),
+                        plan: proven,
+                    });
                     return Answer::Reset;
                 }
-                None => None,
+                None => (None, Intent::Stuck, None),
             }
         } else {
-            self.goal_plan(self.pose, Mode::Known, 1, false)
-                .and_then(|p| p.actions.first().copied())
+            let plan = self.goal_plan(self.pose, Mode::Known, 1, false);
+            let action = plan.as_ref().and_then(|p| p.actions.first().copied());
+            (action, Intent::Run, plan)
         };
+        self.trace = Some(Trace {
+            run,
+            step,
+            from,
+            intent: if action.is_some() {
+                intent
+            } else {
+                Intent::Stuck
+            },
+            plan: plan.filter(|_| action.is_some()),
+        });
         // No plan: the goal room cannot be reached; turn in place until the end.
         let (rotation, movement) = action.unwrap_or((90, 0));
         if let Some((next, _)) = self.map.apply(self.pose, rotation, movement, Mode::Known) {
@@ -234,6 +338,90 @@ impl Bot for Champion {
             }
         }
         Answer::Move { rotation, movement }
+    }
+
+    fn debug(&mut self) -> Option<DebugDraw> {
+        if !self.draw {
+            return None;
+        }
+        let trace = self.trace.as_ref()?;
+        let n = self.map.n;
+        let mut d = DebugDraw::new();
+        let steps = trace.plan.as_ref().map_or(0, |p| p.steps);
+        let text = match &trace.intent {
+            Intent::ToGoal => format!(
+                "run 0, step {}: optimistic plan to the goal room, {steps} steps ({} unknown edges)",
+                trace.step,
+                trace.plan.as_ref().map_or(0, |p| p.unknown)
+            ),
+            Intent::Touch => format!(
+                "run 0, step {}: best run proven; to the goal room ({steps} steps), then reset",
+                trace.step
+            ),
+            Intent::Look {
+                known, expected, ..
+            } => format!(
+                "run 0, step {}: proven run {known} steps, likely {expected:.1}: going to look ({steps} step{} away)",
+                trace.step,
+                if steps == 1 { "" } else { "s" }
+            ),
+            Intent::Reset(known) => format!(
+                "run 0, step {}: reset; run 1 will take {known} steps",
+                trace.step
+            ),
+            Intent::Run => format!("run 1, step {}: proven plan, {steps} steps left", trace.step),
+            Intent::Stuck => format!("step {}: no way to the goal room; turning", trace.step),
+        };
+        d.text(text);
+        d.path(
+            trace
+                .plan
+                .as_ref()
+                .map_or_else(Vec::new, |p| p.cells(trace.from)),
+        );
+        // Cells on both sides of the unknown edges a look is for, in orange. Every field
+        // is sent only when it changes: the viewer keeps showing the last one.
+        let mut colors = Vec::new();
+        if let Intent::Look { unknown_edges, .. } = &trace.intent {
+            for &(x, y, dir) in unknown_edges {
+                colors.push((x, y));
+                colors.extend(self.map.neighbor(x, y, dir));
+            }
+            colors.sort_unstable();
+            colors.dedup();
+        }
+        if colors != self.drawn.colors {
+            d.no_colors();
+            for &(x, y) in &colors {
+                d.color(x, y, "#f80");
+            }
+            self.drawn.colors = colors;
+        }
+        let walls = self.map.known_walls();
+        if self.drawn.walls != Some(walls.len()) {
+            self.drawn.walls = Some(walls.len());
+            d.walls(walls);
+        }
+        // Run 0: the optimistic step counts to the goal room (maze rules assumed); from
+        // the reset on, the proven ones that run 1 follows. Recomputed only when the map
+        // has changed (the belief map is made from it).
+        let proven = trace.run == 1 || matches!(trace.intent, Intent::Reset(_));
+        let from = (self.map.unknown_count(), proven);
+        if self.drawn.grid_from != Some(from) {
+            self.drawn.grid_from = Some(from);
+            let map = if proven { &self.map } else { &self.belief };
+            let mode = if proven {
+                Mode::Known
+            } else {
+                Mode::Optimistic
+            };
+            let grid = map.steps_to(|x, y| map.is_goal(x, y), mode);
+            if self.drawn.grid.as_ref() != Some(&grid) {
+                d.grid((0..n).map(|x| grid[x * n..(x + 1) * n].iter().copied()));
+                self.drawn.grid = Some(grid);
+            }
+        }
+        Some(d)
     }
 }
 

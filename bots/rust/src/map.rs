@@ -88,6 +88,26 @@ pub struct Plan {
     pub unknown_edges: Vec<(usize, usize, usize)>,
 }
 
+impl Plan {
+    /// Every cell the plan goes through from `from`, in order, `from`'s cell first: for a
+    /// debug drawing's `path`.
+    pub fn cells(&self, from: Pose) -> Vec<(usize, usize)> {
+        let mut cells = vec![(from.x, from.y)];
+        let (mut x, mut y) = (from.x, from.y);
+        for next in &self.poses {
+            while (x, y) != (next.x, next.y) {
+                if x != next.x {
+                    x = if next.x > x { x + 1 } else { x - 1 };
+                } else {
+                    y = if next.y > y { y + 1 } else { y - 1 };
+                }
+                cells.push((x, y));
+            }
+        }
+        cells
+    }
+}
+
 impl Map {
     /// An empty map: only the perimeter is known (walls).
     pub fn new(n: usize) -> Map {
@@ -186,6 +206,106 @@ impl Map {
             }
         }
         out
+    }
+
+    /// The walls known inside the maze (the perimeter left out), each once, as
+    /// `(x, y, UP)` or `(x, y, RIGHT)`: for a debug drawing's `walls`.
+    pub fn known_walls(&self) -> Vec<(usize, usize, usize)> {
+        let n = self.n;
+        let mut out = Vec::new();
+        for x in 0..n {
+            for y in 0..n {
+                for d in [UP, RIGHT] {
+                    let inside = if d == UP { y + 1 < n } else { x + 1 < n };
+                    if inside && self.edges[x * n + y][d] == Edge::Wall {
+                        out.push((x, y, d));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// For every cell (index `x * n + y`), the fewest steps from it, at its best heading,
+    /// until a movement ends in a cell where `target` holds, crossing only edges allowed
+    /// in `mode` (0 in a target cell; `None` where no plan exists). The distances a
+    /// flood fill gives, in the referee's steps: for a debug drawing's `grid`.
+    pub fn steps_to(&self, target: impl Fn(usize, usize) -> bool, mode: Mode) -> Vec<Option<u32>> {
+        let n = self.n;
+        // reach[c * 4 + d]: how many cells (up to 3) a straight move from cell c in
+        // direction d may cross in `mode`.
+        let mut reach = vec![0u8; n * n * 4];
+        let allowed = |e: Edge| e == Edge::Open || (e == Edge::Unknown && mode == Mode::Optimistic);
+        // Each direction from its far side, so the next cell's reach is known first.
+        for d in 0..4 {
+            for i in 0..n {
+                for j in 0..n {
+                    let (x, y) = match d {
+                        UP => (i, n - 1 - j),
+                        RIGHT => (n - 1 - j, i),
+                        DOWN => (i, j),
+                        _ => (j, i),
+                    };
+                    let c = x * n + y;
+                    if allowed(self.edges[c][d]) {
+                        if let Some((nx, ny)) = self.neighbor(x, y, d) {
+                            reach[c * 4 + d] = 1 + reach[(nx * n + ny) * 4 + d].min(2);
+                        }
+                    }
+                }
+            }
+        }
+        // The index step of one cell in each direction (cell index x * n + y).
+        let offset = [1isize, n as isize, -1, -(n as isize)];
+        let mut dist = vec![u32::MAX; n * n * 4];
+        let mut queue = Vec::with_capacity(n * n * 4);
+        for x in 0..n {
+            for y in 0..n {
+                if target(x, y) {
+                    for h in 0..4 {
+                        dist[(x * n + y) * 4 + h] = 0;
+                        queue.push((x * n + y) * 4 + h);
+                    }
+                }
+            }
+        }
+        // Backwards, breadth first: the poses that reach (cell, h) in one step are those
+        // that turn to h (from h, h-90 or h+90) and then move straight 0..3 cells forward
+        // or backward to arrive here, i.e. that stand up to `reach` cells away behind or
+        // ahead of the cell.
+        let mut head = 0;
+        while head < queue.len() {
+            let state = queue[head];
+            head += 1;
+            let (cell, h) = (state / 4, state % 4);
+            let d = dist[state] + 1;
+            let befores = [h, (h + 3) % 4, (h + 1) % 4];
+            for back in [(h + 2) % 4, h] {
+                for k in 0..=reach[cell * 4 + back] as isize {
+                    if k == 0 && back == h {
+                        continue; // movement 0 is counted once
+                    }
+                    let from = (cell as isize + k * offset[back]) as usize;
+                    for &before in &befores {
+                        let p = from * 4 + before;
+                        if dist[p] == u32::MAX {
+                            dist[p] = d;
+                            queue.push(p);
+                        }
+                    }
+                }
+            }
+        }
+        (0..n * n)
+            .map(|c| {
+                let best = dist[c * 4..c * 4 + 4]
+                    .iter()
+                    .copied()
+                    .min()
+                    .unwrap_or(u32::MAX);
+                (best != u32::MAX).then_some(best)
+            })
+            .collect()
     }
 
     /// Unknown edges in the whole map.
@@ -475,6 +595,59 @@ mod tests {
             )
             .unwrap();
         assert_eq!((o.steps, o.unknown), (2, 2));
+    }
+
+    #[test]
+    fn steps_to_agrees_with_the_planner() {
+        // A pseudo-random 8x8 map with open, unknown and wall edges.
+        let mut m = Map::new(8);
+        let mut z = 12345u64;
+        for x in 0..8 {
+            for y in 0..8 {
+                for d in [UP, RIGHT] {
+                    if m.neighbor(x, y, d).is_some() {
+                        z = z
+                            .wrapping_mul(6364136223846793005)
+                            .wrapping_add(1442695040888963407);
+                        let e = match (z >> 33) % 5 {
+                            0 => Edge::Wall,
+                            1 => Edge::Unknown,
+                            _ => Edge::Open,
+                        };
+                        m.set(x, y, d, e);
+                    }
+                }
+            }
+        }
+        for mode in [Mode::Known, Mode::Optimistic] {
+            let steps = m.steps_to(|x, y| m.is_goal(x, y), mode);
+            for x in 0..8 {
+                for y in 0..8 {
+                    let want = if m.is_goal(x, y) {
+                        Some(0)
+                    } else {
+                        (0..4)
+                            .filter_map(|heading| {
+                                m.plan(Pose { x, y, heading }, |a, b| m.is_goal(a, b), mode, false)
+                                    .map(|p| p.steps)
+                            })
+                            .min()
+                    };
+                    assert_eq!(steps[x * 8 + y], want, "({x}, {y}) {mode:?}");
+                }
+            }
+        }
+        assert_eq!(m.known_walls().len(), {
+            let mut count = 0;
+            for x in 0..8 {
+                for y in 0..8 {
+                    count += (0..4)
+                        .filter(|&d| m.neighbor(x, y, d).is_some() && m.edge(x, y, d) == Edge::Wall)
+                        .count();
+                }
+            }
+            count / 2
+        });
     }
 
     #[test]
