@@ -391,3 +391,59 @@ async fn uploaded_sources_are_built_once_in_the_sandbox_before_they_play() {
         assert!(s == 422 || s == 400, "{what}: {s} {e}");
     }
 }
+
+#[tokio::test]
+async fn the_rust_kit_uploaded_as_source_builds_with_cargo_and_plays() {
+    // As bots/rust/README.md shows: the sources, `cargo build --release --offline`.
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let kit = root().join("bots/rust");
+    let mut files = serde_json::Map::new();
+    for f in ["Cargo.toml", "Cargo.lock"] {
+        let text = std::fs::read_to_string(kit.join(f)).unwrap();
+        files.insert(f.to_string(), Value::String(text));
+    }
+    let mut stack = vec![kit.join("src")];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let name = p.strip_prefix(&kit).unwrap().to_string_lossy().into_owned();
+                files.insert(name, Value::String(std::fs::read_to_string(&p).unwrap()));
+            }
+        }
+    }
+    let (s, created) = server
+        .post(
+            "/api/bots",
+            json!({"name": "rust-bot", "command": "./target/release/champion",
+                   "build": "cargo build --release --offline", "files": files}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 201, "{created}");
+    let (bot, token) = (
+        created["bot_id"].as_i64().unwrap(),
+        created["owner_token"].as_str().unwrap().to_string(),
+    );
+    let v = wait_built(&server, bot).await;
+    let (_, log) = server
+        .get(
+            &format!("/api/bots/{bot}/versions/1/build-log"),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(v["build_status"], "ready", "{log}");
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": 1, "seed": 1}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let m = wait_match(&server, q["match_id"].as_i64().unwrap()).await;
+    assert_eq!(m["status"], "finished", "{m}");
+}

@@ -157,12 +157,30 @@ pub struct TestServer {
     client: reqwest::Client,
 }
 
+/// Clears the variables that rustup's proxy gives to everything `cargo test` runs when
+/// they only repeat rustup's defaults, so the binary sees the environment it has when
+/// installed and started from a shell.
+fn as_installed(command: &mut Command) {
+    let home = PathBuf::from(std::env::var_os("HOME").unwrap_or_default());
+    let defaults = [("RUSTUP_HOME", ".rustup"), ("CARGO_HOME", ".cargo")];
+    if defaults
+        .iter()
+        .all(|(key, dir)| std::env::var_os(key).is_none_or(|v| v == home.join(dir)))
+    {
+        for key in ["RUSTUP_HOME", "CARGO_HOME", "RUSTUP_TOOLCHAIN"] {
+            command.env_remove(key);
+        }
+    }
+}
+
 impl TestServer {
     /// Starts the server binary in `dir` (database and bot files inside it).
     pub fn start(dir: &Path, extra: &[&str]) -> TestServer {
         use std::io::BufRead;
         let database = format!("sqlite://{}", dir.join("mazearena.db").display());
-        let mut child = Command::new(env!("CARGO_BIN_EXE_mazearena"))
+        let mut command = Command::new(env!("CARGO_BIN_EXE_mazearena"));
+        as_installed(&mut command);
+        let mut child = command
             .arg("serve")
             .args(["--bind", "127.0.0.1:0", "--database", &database])
             .arg("--data-dir")

@@ -55,7 +55,23 @@ pub fn bot_env() -> Vec<(String, String)> {
     env.push(("TMPDIR".into(), tmp));
     env.push(("PYTHONUNBUFFERED".into(), "1".into()));
     env.push(("PYTHONDONTWRITEBYTECODE".into(), "1".into()));
+    // rustup's proxies look for their toolchains under $HOME, which is the scratch area
+    // here: point them at the ones mounted from ours.
+    if std::env::var_os("RUSTUP_HOME").is_none()
+        && let Some(rustup) = default_rustup_home()
+    {
+        env.push(("RUSTUP_HOME".into(), rustup.to_string_lossy().into_owned()));
+    }
     env
+}
+
+/// `~/.rustup` when rustup's proxies in `~/.cargo/bin` are on PATH (and it exists).
+fn default_rustup_home() -> Option<PathBuf> {
+    let home = PathBuf::from(std::env::var_os("HOME")?);
+    let cargo_bin = home.join(".cargo").join("bin");
+    let on_path = std::env::split_paths(&std::env::var_os("PATH")?).any(|d| d == cargo_bin);
+    let rustup = home.join(".rustup");
+    (on_path && rustup.is_dir()).then_some(rustup)
 }
 
 fn is_system(path: &Path) -> bool {
@@ -67,7 +83,6 @@ fn is_system(path: &Path) -> bool {
 /// lies inside a path of `hide`.
 pub fn runtime_roots(hide: &[PathBuf]) -> Vec<PathBuf> {
     let mut roots: Vec<PathBuf> = Vec::new();
-    let home = std::env::var_os("HOME").map(PathBuf::from);
     let mut add = |p: PathBuf| {
         if p.is_dir() && !is_system(&p) && p != Path::new("/") && !roots.contains(&p) {
             roots.push(p);
@@ -77,6 +92,10 @@ pub fn runtime_roots(hide: &[PathBuf]) -> Vec<PathBuf> {
         if let Some(v) = std::env::var_os(key) {
             add(PathBuf::from(v));
         }
+    }
+    // rustup's proxies in ~/.cargo/bin need the toolchains in ~/.rustup.
+    if let Some(rustup) = default_rustup_home() {
+        add(rustup);
     }
     if let Some(path) = std::env::var_os("PATH") {
         for dir in std::env::split_paths(&path) {
@@ -90,10 +109,6 @@ pub fn runtime_roots(hide: &[PathBuf]) -> Vec<PathBuf> {
             } else {
                 dir.clone()
             };
-            // rustup's proxies in ~/.cargo/bin need the toolchains in ~/.rustup.
-            if let Some(home) = home.as_ref().filter(|h| root == h.join(".cargo")) {
-                add(home.join(".rustup"));
-            }
             add(root);
         }
     }
