@@ -47,11 +47,44 @@ pub struct Standing {
 }
 
 impl Storage {
-    /// The standings, best mean score first (ties: higher finish rate, then name).
+    /// The standings, best mean score first (ties: higher finish rate, then name), read
+    /// from the running sums of the `standing` table (kept by triggers on `match`): a
+    /// few rows per bot version, however many matches there are.
     ///
     /// # Errors
     /// Database failures.
     pub async fn leaderboard(&self, scope: Scope) -> Result<Vec<Standing>> {
+        let filter = match scope {
+            Scope::Tournament(_) => "s.tournament_id = ?",
+            Scope::Ranking => "s.hidden = 1 and ? is null and v.version = b.latest",
+            Scope::All => "? is null and v.version = b.latest",
+        };
+        let sql = format!(
+            "select b.bot_id, b.name, v.version, sum(s.played) as played,
+                 sum(s.finished) as finished,
+                 sum(s.score_sum) / sum(s.played) as mean_score,
+                 1.0 * sum(s.finished) / sum(s.played) as finish_rate,
+                 case when sum(s.ratio_count) > 0 then sum(s.ratio_sum) / sum(s.ratio_count) end as mean_ratio,
+                 sum(s.played * s.hidden) as hidden_played
+             from standing s
+             join bot_version v on v.bot_version_id = s.bot_version_id
+             join (select bot_id, name, (select max(version) from bot_version x where x.bot_id = bot.bot_id) as latest
+                   from bot) b on b.bot_id = v.bot_id
+             where s.played > 0 and {filter}
+             group by v.bot_version_id
+             order by mean_score asc, finish_rate desc, b.name asc"
+        );
+        self.standings(&sql, scope).await
+    }
+
+    /// The same standings as [`Storage::leaderboard`], computed from the match table
+    /// itself: the slow way, kept to check the running sums against. (Before release
+    /// 0.2 this was the leaderboard, with one flaw: a did-not-finish was written as the
+    /// integer 1000, so its ratio to the optimum was an integer division.)
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn leaderboard_recount(&self, scope: Scope) -> Result<Vec<Standing>> {
         let filter = match scope {
             Scope::Tournament(_) => "m.tournament_id = ?",
             Scope::Ranking => {
@@ -64,9 +97,9 @@ impl Storage {
         let sql = format!(
             "select b.bot_id, b.name, v.version, count(*) as played,
                  sum(m.status = 'finished') as finished,
-                 avg(case when m.status = 'finished' then m.score else {DNF_SCORE} end) as mean_score,
+                 avg(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) as mean_score,
                  avg(case when m.status = 'finished' then 1.0 else 0.0 end) as finish_rate,
-                 avg((case when m.status = 'finished' then m.score else {DNF_SCORE} end) / z.optimum) as mean_ratio,
+                 avg((case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) / z.optimum) as mean_ratio,
                  sum(z.hidden) as hidden_played
              from match m
              join bot_version v on v.bot_version_id = m.bot_version_id
@@ -76,11 +109,15 @@ impl Storage {
              group by v.bot_version_id
              order by mean_score asc, finish_rate desc, b.name asc"
         );
+        self.standings(&sql, scope).await
+    }
+
+    async fn standings(&self, sql: &str, scope: Scope) -> Result<Vec<Standing>> {
         let tournament = match scope {
             Scope::Tournament(id) => Some(id),
             _ => None,
         };
-        let mut rows: Vec<Standing> = sqlx::query_as(&sql)
+        let mut rows: Vec<Standing> = sqlx::query_as(sql)
             .bind(tournament)
             .fetch_all(self.pool())
             .await?;
@@ -88,5 +125,88 @@ impl Storage {
             row.rank = i as i64 + 1;
         }
         Ok(rows)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runner::{MatchRecord, MatchStatus};
+    use crate::storage::test_support::{bot_and_maze, fresh};
+
+    fn record(status: MatchStatus, score: Option<f64>) -> MatchRecord {
+        serde_json::from_value(serde_json::json!({
+            "engine_version": "t", "protocol": 1, "maze_hash": "hash", "maze_dim": 2, "seed": 1,
+            "limits": {"max_steps": 1000, "startup_timeout_ms": null, "move_timeout_ms": null, "memory_limit_mb": null},
+            "status": status, "score": score, "run0_steps": 3, "run1_steps": 1, "total_steps": 4,
+            "warnings": [], "error": null, "stderr_tail": "", "timings": {"wall_ms": 1, "bot_cpu_ms": null, "max_answer_us": 1, "mean_answer_us": 1}
+        }))
+        .unwrap()
+    }
+
+    async fn same_as_recount(db: &Storage, scope: Scope) -> Vec<Standing> {
+        let kept = db.leaderboard(scope).await.unwrap();
+        let counted = db.leaderboard_recount(scope).await.unwrap();
+        assert_eq!(kept.len(), counted.len(), "{kept:?} {counted:?}");
+        for (k, c) in kept.iter().zip(&counted) {
+            assert_eq!(
+                (k.bot_id, k.played, k.finished),
+                (c.bot_id, c.played, c.finished)
+            );
+            assert!((k.mean_score - c.mean_score).abs() < 1e-9, "{k:?} {c:?}");
+            assert!((k.finish_rate - c.finish_rate).abs() < 1e-9, "{k:?} {c:?}");
+            assert_eq!(k.mean_ratio.is_some(), c.mean_ratio.is_some());
+        }
+        kept
+    }
+
+    #[tokio::test]
+    async fn the_running_sums_follow_every_way_a_match_gets_or_loses_its_status() {
+        let (db, _dir) = fresh().await;
+        let (v, z) = bot_and_maze(&db).await;
+        assert!(db.leaderboard(Scope::All).await.unwrap().is_empty());
+        let t = db.create_tournament("t", &[v], &[z], 3).await.unwrap();
+        // Finished (score 1.1), crashed by the worker, and one left queued.
+        let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+        assert!(
+            db.complete_match(a.match_id, "w", &record(MatchStatus::Finished, Some(1.1)))
+                .await
+                .unwrap()
+        );
+        let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+        assert!(db.fail_match(b.match_id, "w", "ours").await.unwrap());
+        let board = same_as_recount(&db, Scope::Tournament(t.tournament_id)).await;
+        assert_eq!((board[0].played, board[0].finished), (2, 1));
+        assert!((board[0].mean_score - (1.1 + DNF_SCORE) / 2.0).abs() < 1e-9);
+        assert!((board[0].mean_ratio.unwrap() - (1.1 + DNF_SCORE) / 2.0).abs() < 1e-9);
+        same_as_recount(&db, Scope::All).await;
+        // A single match outside the tournament counts in `All`, not in the tournament.
+        let single = db.queue_match(v, z, 5).await.unwrap();
+        let c = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+        assert_eq!(c.match_id, single);
+        db.complete_match(c.match_id, "w", &record(MatchStatus::Timeout, None))
+            .await
+            .unwrap();
+        assert_eq!(same_as_recount(&db, Scope::All).await[0].played, 3);
+        assert_eq!(
+            same_as_recount(&db, Scope::Tournament(t.tournament_id)).await[0].played,
+            2
+        );
+        // Rows that change or vanish by other statements are followed too.
+        sqlx::query("update match set status = 'finished', score = 2.0 where match_id = ?")
+            .bind(b.match_id)
+            .execute(db.pool())
+            .await
+            .unwrap();
+        assert_eq!(same_as_recount(&db, Scope::All).await[0].finished, 2);
+        sqlx::query("delete from match where match_id = ?")
+            .bind(a.match_id)
+            .execute(db.pool())
+            .await
+            .unwrap();
+        let all = same_as_recount(&db, Scope::All).await;
+        assert_eq!((all[0].played, all[0].finished), (2, 1));
+        // No hidden maze: no ranking.
+        assert!(same_as_recount(&db, Scope::Ranking).await.is_empty());
     }
 }

@@ -8,8 +8,8 @@ use reqwest::Method;
 use serde_json::{Value, json};
 
 use crate::support::{
-    ADMIN, TestServer, adapter_bot_files, mazearena, register, root, shared_maze, simple_bot_files,
-    wait_match,
+    ADMIN, TestServer, adapter_bot_files, assert_standings_equal_recount, mazearena, register,
+    root, shared_maze, simple_bot_files, wait_match,
 };
 
 async fn upload_maze(server: &TestServer, name: &str, path: &std::path::Path, hidden: bool) -> i64 {
@@ -163,6 +163,7 @@ async fn a_tournament_records_every_match_and_ranks_by_mean_score() {
         .unwrap();
     let rows = storage.tournament_matches(id).await.unwrap();
     assert_eq!(rows.len(), 12);
+    assert_standings_equal_recount(&server.database, &[id]).await;
     let keys: BTreeSet<(i64, i64, i64)> = rows
         .iter()
         .map(|r| (r.bot_id, r.maze_id, r.repeat.unwrap()))
@@ -647,6 +648,7 @@ async fn hostile_bots_are_recorded_and_the_server_keeps_serving() {
     );
     assert!(metrics.contains("mazearena_queue_depth 0"));
     assert!(metrics.contains("mazearena_match_duration_seconds_count 3"));
+    assert_standings_equal_recount(&server.database, &[]).await;
 }
 
 #[tokio::test]
@@ -790,6 +792,7 @@ async fn a_server_killed_mid_tournament_completes_it_after_a_restart() {
         .unwrap();
     let rows = storage.tournament_matches(id).await.unwrap();
     assert_eq!(rows.len(), 10, "no duplicates, none lost");
+    assert_standings_equal_recount(&server.database, &[id]).await;
     let keys: BTreeSet<(i64, i64)> = rows.iter().map(|r| (r.bot_id, r.repeat.unwrap())).collect();
     assert_eq!(keys.len(), 10);
     for r in &rows {

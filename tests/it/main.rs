@@ -12,4 +12,5 @@ mod readme;
 mod referee;
 mod runner;
 mod support;
+mod upgrade;
 mod web;

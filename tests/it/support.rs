@@ -350,3 +350,47 @@ pub async fn wait_match(server: &TestServer, id: i64) -> Value {
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
 }
+
+/// Checks that the standings kept as running sums equal those computed from the match
+/// table, for the whole database (`all`, `ranking`) and for `tournaments`.
+pub async fn assert_standings_equal_recount(database: &str, tournaments: &[i64]) {
+    use mazearena::storage::leaderboard::Scope;
+    let storage = mazearena::storage::Storage::open(database).await.unwrap();
+    let mut scopes = vec![Scope::All, Scope::Ranking];
+    scopes.extend(tournaments.iter().map(|&t| Scope::Tournament(t)));
+    for scope in scopes {
+        let kept = storage.leaderboard(scope).await.unwrap();
+        let counted = storage.leaderboard_recount(scope).await.unwrap();
+        assert_eq!(kept.len(), counted.len(), "{scope:?}: {kept:?} {counted:?}");
+        for (k, c) in kept.iter().zip(&counted) {
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
+            assert!(
+                (
+                    k.rank,
+                    k.bot_id,
+                    k.version,
+                    k.played,
+                    k.finished,
+                    k.hidden_played
+                ) == (
+                    c.rank,
+                    c.bot_id,
+                    c.version,
+                    c.played,
+                    c.finished,
+                    c.hidden_played
+                ) && close(k.mean_score, c.mean_score)
+                    && close(k.finish_rate, c.finish_rate)
+                    && match (k.mean_ratio, c.mean_ratio) {
+                        (Some(a), Some(b)) => close(a, b),
+                        (a, b) => a == b,
+                    },
+                "{scope:?}: kept {k:?}, counted {c:?}"
+            );
+        }
+        if !matches!(scope, Scope::Ranking) {
+            assert!(!kept.is_empty(), "{scope:?}: nothing to compare");
+        }
+    }
+    storage.close().await;
+}

@@ -1,0 +1,108 @@
+-- mazearena schema, version 4: standings kept as running sums, so that reading a
+-- leaderboard never aggregates the match table. Never edit an applied migration: add a
+-- new file.
+--
+-- One row per bot version, tournament (0: matches outside any tournament) and kind of
+-- maze (hidden or public), over the matches with a final status (not queued, not
+-- running). Triggers on `match` keep it in step in the same transaction as the write
+-- that gives a match its final status (or takes it away), whatever statement does it.
+
+create table standing (
+    bot_version_id integer not null references bot_version (bot_version_id),
+    -- the tournament, or 0 for matches outside any tournament
+    tournament_id integer not null,
+    -- 1: the matches on hidden mazes; 0: on public ones
+    hidden integer not null,
+    -- matches counted
+    played integer not null default 0,
+    -- of which finished
+    finished integer not null default 0,
+    -- sum of their scores, a match that did not finish counting as 1000
+    score_sum real not null default 0,
+    -- sum of score / optimum over the matches on mazes with a known optimum, and how
+    -- many they are
+    ratio_sum real not null default 0,
+    ratio_count integer not null default 0,
+    primary key (bot_version_id, tournament_id, hidden)
+);
+
+create trigger standing_on_insert after insert on match
+when new.status not in ('queued', 'running')
+begin
+    insert into standing (bot_version_id, tournament_id, hidden, played, finished,
+                          score_sum, ratio_sum, ratio_count)
+    select new.bot_version_id, coalesce(new.tournament_id, 0), z.hidden, 1,
+           new.status = 'finished',
+           case when new.status = 'finished' then new.score else 1000.0 end,
+           coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
+           z.optimum is not null
+    from maze z where z.maze_id = new.maze_id
+    on conflict (bot_version_id, tournament_id, hidden) do update set
+        played = played + excluded.played,
+        finished = finished + excluded.finished,
+        score_sum = score_sum + excluded.score_sum,
+        ratio_sum = ratio_sum + excluded.ratio_sum,
+        ratio_count = ratio_count + excluded.ratio_count;
+end;
+
+create trigger standing_on_delete after delete on match
+when old.status not in ('queued', 'running')
+begin
+    update standing set
+        played = played - 1,
+        finished = finished - (old.status = 'finished'),
+        score_sum = score_sum - (case when old.status = 'finished' then old.score else 1000.0 end),
+        ratio_sum = ratio_sum - coalesce((case when old.status = 'finished' then old.score else 1000.0 end)
+                                         / (select optimum from maze where maze_id = old.maze_id), 0),
+        ratio_count = ratio_count - ((select optimum from maze where maze_id = old.maze_id) is not null)
+    where bot_version_id = old.bot_version_id
+      and tournament_id = coalesce(old.tournament_id, 0)
+      and hidden = (select hidden from maze where maze_id = old.maze_id);
+end;
+
+-- An update that changes what a match counts as: take the old away, add the new.
+create trigger standing_on_update_remove after update of status, score, bot_version_id, maze_id, tournament_id on match
+when old.status not in ('queued', 'running')
+begin
+    update standing set
+        played = played - 1,
+        finished = finished - (old.status = 'finished'),
+        score_sum = score_sum - (case when old.status = 'finished' then old.score else 1000.0 end),
+        ratio_sum = ratio_sum - coalesce((case when old.status = 'finished' then old.score else 1000.0 end)
+                                         / (select optimum from maze where maze_id = old.maze_id), 0),
+        ratio_count = ratio_count - ((select optimum from maze where maze_id = old.maze_id) is not null)
+    where bot_version_id = old.bot_version_id
+      and tournament_id = coalesce(old.tournament_id, 0)
+      and hidden = (select hidden from maze where maze_id = old.maze_id);
+end;
+
+create trigger standing_on_update_add after update of status, score, bot_version_id, maze_id, tournament_id on match
+when new.status not in ('queued', 'running')
+begin
+    insert into standing (bot_version_id, tournament_id, hidden, played, finished,
+                          score_sum, ratio_sum, ratio_count)
+    select new.bot_version_id, coalesce(new.tournament_id, 0), z.hidden, 1,
+           new.status = 'finished',
+           case when new.status = 'finished' then new.score else 1000.0 end,
+           coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
+           z.optimum is not null
+    from maze z where z.maze_id = new.maze_id
+    on conflict (bot_version_id, tournament_id, hidden) do update set
+        played = played + excluded.played,
+        finished = finished + excluded.finished,
+        score_sum = score_sum + excluded.score_sum,
+        ratio_sum = ratio_sum + excluded.ratio_sum,
+        ratio_count = ratio_count + excluded.ratio_count;
+end;
+
+-- The matches recorded before this version.
+insert into standing (bot_version_id, tournament_id, hidden, played, finished,
+                      score_sum, ratio_sum, ratio_count)
+select m.bot_version_id, coalesce(m.tournament_id, 0), z.hidden, count(*),
+       sum(m.status = 'finished'),
+       sum(case when m.status = 'finished' then m.score else 1000.0 end),
+       coalesce(sum((case when m.status = 'finished' then m.score else 1000.0 end) / z.optimum), 0),
+       count(z.optimum)
+from match m join maze z on z.maze_id = m.maze_id
+where m.status not in ('queued', 'running')
+group by m.bot_version_id, coalesce(m.tournament_id, 0), z.hidden;
