@@ -2,14 +2,14 @@
 -- leaderboard never aggregates the match table. Never edit an applied migration: add a
 -- new file.
 --
--- One row per bot version, tournament (0: matches outside any tournament) and kind of
--- maze (hidden or public), over the matches with a final status (not queued, not
--- running). Triggers on `match` keep it in step in the same transaction as the write
+-- One row per bot version, tournament (0: matches outside any tournament; -1: all of
+-- the version's matches) and kind of maze (hidden or public), over the matches with a
+-- final status (not queued, not running). Triggers on `match` keep it in step in the same transaction as the write
 -- that gives a match its final status (or takes it away), whatever statement does it.
 
 create table standing (
     bot_version_id integer not null references bot_version (bot_version_id),
-    -- the tournament, or 0 for matches outside any tournament
+    -- the tournament, 0 for matches outside any tournament, -1 for all matches
     tournament_id integer not null,
     -- 1: the matches on hidden mazes; 0: on public ones
     hidden integer not null,
@@ -31,12 +31,13 @@ when new.status not in ('queued', 'running')
 begin
     insert into standing (bot_version_id, tournament_id, hidden, played, finished,
                           score_sum, ratio_sum, ratio_count)
-    select new.bot_version_id, coalesce(new.tournament_id, 0), z.hidden, 1,
+    select new.bot_version_id, k.t, z.hidden, 1,
            new.status = 'finished',
            case when new.status = 'finished' then new.score else 1000.0 end,
            coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
            z.optimum is not null
-    from maze z where z.maze_id = new.maze_id
+    from maze z, (select coalesce(new.tournament_id, 0) as t union all select -1) k
+    where z.maze_id = new.maze_id
     on conflict (bot_version_id, tournament_id, hidden) do update set
         played = played + excluded.played,
         finished = finished + excluded.finished,
@@ -56,7 +57,7 @@ begin
                                          / (select optimum from maze where maze_id = old.maze_id), 0),
         ratio_count = ratio_count - ((select optimum from maze where maze_id = old.maze_id) is not null)
     where bot_version_id = old.bot_version_id
-      and tournament_id = coalesce(old.tournament_id, 0)
+      and tournament_id in (coalesce(old.tournament_id, 0), -1)
       and hidden = (select hidden from maze where maze_id = old.maze_id);
 end;
 
@@ -72,7 +73,7 @@ begin
                                          / (select optimum from maze where maze_id = old.maze_id), 0),
         ratio_count = ratio_count - ((select optimum from maze where maze_id = old.maze_id) is not null)
     where bot_version_id = old.bot_version_id
-      and tournament_id = coalesce(old.tournament_id, 0)
+      and tournament_id in (coalesce(old.tournament_id, 0), -1)
       and hidden = (select hidden from maze where maze_id = old.maze_id);
 end;
 
@@ -81,12 +82,13 @@ when new.status not in ('queued', 'running')
 begin
     insert into standing (bot_version_id, tournament_id, hidden, played, finished,
                           score_sum, ratio_sum, ratio_count)
-    select new.bot_version_id, coalesce(new.tournament_id, 0), z.hidden, 1,
+    select new.bot_version_id, k.t, z.hidden, 1,
            new.status = 'finished',
            case when new.status = 'finished' then new.score else 1000.0 end,
            coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
            z.optimum is not null
-    from maze z where z.maze_id = new.maze_id
+    from maze z, (select coalesce(new.tournament_id, 0) as t union all select -1) k
+    where z.maze_id = new.maze_id
     on conflict (bot_version_id, tournament_id, hidden) do update set
         played = played + excluded.played,
         finished = finished + excluded.finished,
@@ -98,11 +100,15 @@ end;
 -- The matches recorded before this version.
 insert into standing (bot_version_id, tournament_id, hidden, played, finished,
                       score_sum, ratio_sum, ratio_count)
-select m.bot_version_id, coalesce(m.tournament_id, 0), z.hidden, count(*),
+select m.v, m.t, z.hidden, count(*),
        sum(m.status = 'finished'),
        sum(case when m.status = 'finished' then m.score else 1000.0 end),
        coalesce(sum((case when m.status = 'finished' then m.score else 1000.0 end) / z.optimum), 0),
        count(z.optimum)
-from match m join maze z on z.maze_id = m.maze_id
-where m.status not in ('queued', 'running')
-group by m.bot_version_id, coalesce(m.tournament_id, 0), z.hidden;
+from (select bot_version_id as v, coalesce(tournament_id, 0) as t, status, score, maze_id
+      from match where status not in ('queued', 'running')
+      union all
+      select bot_version_id, -1, status, score, maze_id
+      from match where status not in ('queued', 'running')) m
+join maze z on z.maze_id = m.maze_id
+group by m.v, m.t, z.hidden;

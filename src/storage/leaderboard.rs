@@ -48,16 +48,19 @@ pub struct Standing {
 
 impl Storage {
     /// The standings, best mean score first (ties: higher finish rate, then name), read
-    /// from the running sums of the `standing` table (kept by triggers on `match`): a
-    /// few rows per bot version, however many matches there are.
+    /// from the running sums of the `standing` table (kept by triggers on `match`): two
+    /// rows per bot version (hidden and public mazes) for the whole ranking, a few per
+    /// tournament, however many matches there are.
     ///
     /// # Errors
     /// Database failures.
     pub async fn leaderboard(&self, scope: Scope) -> Result<Vec<Standing>> {
         let filter = match scope {
             Scope::Tournament(_) => "s.tournament_id = ?",
-            Scope::Ranking => "s.hidden = 1 and ? is null and v.version = b.latest",
-            Scope::All => "? is null and v.version = b.latest",
+            Scope::Ranking => {
+                "s.tournament_id = -1 and s.hidden = 1 and ? is null and v.version = b.latest"
+            }
+            Scope::All => "s.tournament_id = -1 and ? is null and v.version = b.latest",
         };
         let sql = format!(
             "select b.bot_id, b.name, v.version, sum(s.played) as played,

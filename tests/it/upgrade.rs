@@ -55,7 +55,11 @@ async fn a_database_of_release_0_1_0_keeps_its_standings_and_replays() {
         let old = read(&root().join(format!("tests/fixtures/db/replay-{id}.json")));
         let new = read(&out);
         let steps = old["trace"].as_array().map_or(0, Vec::len);
-        assert_eq!(steps > 0, id != 5, "match 5 crashed at once, the others played");
+        assert_eq!(
+            steps > 0,
+            id != 5,
+            "match 5 crashed at once, the others played"
+        );
         if let Err(e) = holds(&new, &old, "replay") {
             panic!("match {id}: {e}");
         }
