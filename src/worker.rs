@@ -1,5 +1,6 @@
-//! Match workers: a pool of tasks that claim queued matches from the database with a
-//! lease, play them with the runner, and write each record in one transaction.
+//! Match workers: a pool of threads, each pinned to a core of its own (see
+//! [`runner::affinity`]), that claim queued matches from the database with a lease, play
+//! them with the runner, and write each record in one transaction.
 //!
 //! Used by the server and by `mazearena tournament`. A worker keeps its lease alive while
 //! a match runs; a match whose worker died goes back to the queue when its lease expires
@@ -79,7 +80,8 @@ pub fn spawn_workers(
     on_done: Option<Arc<dyn Fn(MatchStatus) + Send + Sync>>,
 ) {
     let owner: Arc<str> = lease_owner_name().into();
-    for _ in 0..config.jobs.max(1) {
+    let cores = runner::affinity::allowed_cores();
+    for k in 0..config.jobs.max(1) {
         let worker = Worker {
             storage: storage.clone(),
             config: config.clone(),
@@ -89,7 +91,23 @@ pub fn spawn_workers(
             owner: owner.clone(),
             on_done: on_done.clone(),
         };
-        tracker.spawn(worker.run());
+        let core = (!cores.is_empty()).then(|| cores[k % cores.len()]);
+        let (done, finished) = tokio::sync::oneshot::channel::<()>();
+        let thread = std::thread::Builder::new()
+            .name(format!("match-worker-{k}"))
+            .spawn(move || {
+                worker.run_on_core(core);
+                let _ = done.send(());
+            });
+        match thread {
+            // The tracker waits for the worker's thread to end its last match.
+            Ok(_) => {
+                tracker.spawn(async move {
+                    let _ = finished.await;
+                });
+            }
+            Err(e) => tracing::error!(cause = %e, "could not start a match worker's thread"),
+        }
     }
     let reaper_storage = storage;
     let lease = config.lease;
@@ -132,6 +150,23 @@ struct Worker {
 }
 
 impl Worker {
+    /// Runs the worker on the calling thread, pinned to `core`, in a runtime of its own:
+    /// the referee's side of each match and the bot's processes share that core.
+    fn run_on_core(self, core: Option<usize>) {
+        if let Some(core) = core
+            && let Err(e) = runner::affinity::pin_current_thread(core)
+        {
+            tracing::warn!(core, cause = %e, "could not pin a match worker to its core");
+        }
+        match tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        {
+            Ok(runtime) => runtime.block_on(self.run()),
+            Err(e) => tracing::error!(cause = %e, "could not start a match worker's runtime"),
+        }
+    }
+
     async fn run(self) {
         let lease_ms = self.config.lease.as_millis() as i64;
         while !self.shutdown.stop_claiming.is_cancelled() {

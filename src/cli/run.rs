@@ -101,7 +101,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         env: args.bot_env.clone(),
         echo_stderr: args.verbose,
     };
-    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
+    // One core for the referee and the bot (runner::affinity): the one we are on.
+    crate::runner::affinity::pin_to_this_core();
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .context("cannot start the async runtime")?;
     let (json, verbose) = (args.json, args.verbose);
     if !json {
         println!(

@@ -7,6 +7,7 @@
 //! many can run at once in one process. This module is the only code that starts
 //! processes.
 
+pub mod affinity;
 pub mod botenv;
 pub mod build;
 pub mod framing;
@@ -295,6 +296,7 @@ fn new_record(maze: &Maze, seed: u64, limits: &Limits, sandbox: &Sandbox) -> Mat
         stderr_tail: String::new(),
         timings: Timings::default(),
         bot_pid: None,
+        core: affinity::pinned_core(),
         notices: Vec::new(),
         maze_layout: None,
         trace: Vec::new(),

@@ -198,6 +198,9 @@ pub struct MatchRecord {
     /// The bot's process id (also its process group id) while it ran.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bot_pid: Option<u32>,
+    /// The core the match ran on (referee and bot), when it was pinned to one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub core: Option<usize>,
     /// Notes about the record: debug output or stderr lines that were cut.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notices: Vec<Notice>,

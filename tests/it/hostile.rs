@@ -172,12 +172,20 @@ fn spinning_children_are_counted_in_the_cpu_time_and_die_with_the_match() {
     };
     let r = attack("spin_children.py", &["4"], &[]);
     assert_eq!(r["status"], "step_limit", "{r}");
-    let cpu = r["timings"]["bot_cpu_ms"].as_u64().unwrap();
-    let wall = r["timings"]["wall_ms"].as_u64().unwrap();
-    // Four spinners under a one-core quota use about a core for the whole match.
+    // The same bot without spinners, for comparison.
+    let calm = attack("spin_children.py", &["0"], &[]);
+    let ms = |r: &Value, k: &str| r["timings"][k].as_u64().unwrap();
+    let (cpu, wall, calm_cpu) = (
+        ms(&r, "bot_cpu_ms"),
+        ms(&r, "wall_ms"),
+        ms(&calm, "bot_cpu_ms"),
+    );
+    // The spinners share the match's one core with the bot and the referee (and with
+    // whatever else the machine runs there), so they get a good part of it, and all of
+    // it is counted.
     assert!(
-        cpu * 2 >= wall,
-        "cpu {cpu} ms over a wall time of {wall} ms"
+        cpu >= calm_cpu + wall / 4,
+        "cpu {cpu} ms (without spinners {calm_cpu} ms) over a wall time of {wall} ms: {r}"
     );
 }
 

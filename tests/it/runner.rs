@@ -296,3 +296,22 @@ async fn a_memory_hog_is_stopped_by_the_memory_limit() {
     }
     assert_eq!(r.limits.memory_limit_mb, Some(512));
 }
+
+#[test]
+fn a_match_runs_on_one_core_and_its_bot_is_pinned_to_it_in_the_sandbox_too() {
+    let out = crate::support::mazearena(&[
+        "run",
+        "--maze",
+        "mazes/gen-12-s1.txt",
+        "--bot",
+        "python3 tests/fixtures/bots/reports_cpus.py",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["status"], "step_limit", "{r}");
+    let core = r["core"].as_u64().expect("the record names its core");
+    let tail = r["stderr_tail"].as_str().unwrap();
+    assert_eq!(tail.trim(), format!("cpus {core}"), "{r}");
+    assert_eq!(r["limits"]["sandbox"], sandbox().level());
+}

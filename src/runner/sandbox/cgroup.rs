@@ -81,7 +81,49 @@ impl CgroupRoot {
             })
             .map_err(|e| format!("cannot make a match cgroup: {e}"))?;
         drop(probe);
+        root.sweep_stale();
         Ok(root)
+    }
+
+    /// The folders match cgroups are made in (one per controller with v1).
+    fn folders(&self) -> Vec<&Path> {
+        match self {
+            CgroupRoot::V1 {
+                memory,
+                pids,
+                cpuacct,
+                cpu,
+            } => [Some(memory), Some(pids), Some(cpuacct), cpu.as_ref()]
+                .into_iter()
+                .flatten()
+                .map(PathBuf::as_path)
+                .collect(),
+            CgroupRoot::V2 { base } => vec![base.as_path()],
+        }
+    }
+
+    /// Removes the match cgroups left by processes that are gone (a server killed with
+    /// SIGKILL cannot remove its own), killing anything still in them.
+    pub fn sweep_stale(&self) {
+        for folder in self.folders() {
+            let Ok(entries) = std::fs::read_dir(folder) else {
+                continue;
+            };
+            for entry in entries.flatten() {
+                let name = entry.file_name();
+                let Some(pid) = name
+                    .to_str()
+                    .and_then(|n| n.strip_prefix("m-"))
+                    .and_then(|n| n.split('-').next())
+                    .and_then(|p| p.parse::<u32>().ok())
+                else {
+                    continue;
+                };
+                if !Path::new(&format!("/proc/{pid}")).exists() {
+                    remove_stale(&entry.path());
+                }
+            }
+        }
     }
 
     /// The version, for reports: `v1` or `v2`.
@@ -165,6 +207,24 @@ impl CgroupRoot {
     }
 }
 
+/// Kills whatever is left in a match cgroup of a process that is gone, and removes it.
+fn remove_stale(dir: &Path) {
+    let deadline = Instant::now() + Duration::from_secs(1);
+    loop {
+        let procs = std::fs::read_to_string(dir.join("cgroup.procs")).unwrap_or_default();
+        for pid in procs.lines().filter_map(|l| l.trim().parse::<i32>().ok()) {
+            let _ = nix::sys::signal::kill(
+                nix::unistd::Pid::from_raw(pid),
+                nix::sys::signal::Signal::SIGKILL,
+            );
+        }
+        if std::fs::remove_dir(dir).is_ok() || !dir.exists() || Instant::now() > deadline {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 fn write(dir: &Path, file: &str, value: u64) -> std::io::Result<()> {
     std::fs::write(dir.join(file), value.to_string())
         .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.join(file).display())))
@@ -184,8 +244,17 @@ pub struct MatchCgroup {
 
 impl MatchCgroup {
     fn make(&mut self, dir: &Path) -> std::io::Result<PathBuf> {
-        std::fs::create_dir(dir)
-            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.display())))?;
+        let mut made = std::fs::create_dir(dir);
+        if made
+            .as_ref()
+            .is_err_and(|e| e.kind() == std::io::ErrorKind::AlreadyExists)
+        {
+            // Our names never repeat within a process: this one was left by a process
+            // that had our pid before us and was killed.
+            remove_stale(dir);
+            made = std::fs::create_dir(dir);
+        }
+        made.map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.display())))?;
         self.dirs.push(dir.to_path_buf());
         self.procs.push(
             OpenOptions::new()
