@@ -318,12 +318,17 @@ async fn get_match_replay(
             _ => ApiError::Forbidden(msg),
         });
     }
-    let trace = state.storage.get_trace(id).await?.ok_or_else(|| {
-        ApiError::Conflict(format!(
-            "match {id} has not been played yet ({})",
-            row.status
-        ))
-    })?;
+    let record = state
+        .storage
+        .get_record(id)
+        .await?
+        .filter(|r| !r.trace.is_empty() || row.total_steps.is_some())
+        .ok_or_else(|| {
+            ApiError::Conflict(format!(
+                "match {id} has not been played yet ({})",
+                row.status
+            ))
+        })?;
     let maze = find_maze(&state, row.maze_id).await?;
     Ok(axum::Json(ReplayView {
         match_id: id,
@@ -331,7 +336,7 @@ async fn get_match_replay(
         maze_id: maze.maze_id,
         maze_dim: maze.dim,
         maze_layout: (!maze.hidden || caller.is_admin()).then_some(maze.layout),
-        trace: serde_json::from_str(&trace).unwrap_or(Value::Array(vec![])),
+        trace: serde_json::to_value(&record.trace).unwrap_or(Value::Array(vec![])),
     }))
 }
 
@@ -354,18 +359,23 @@ async fn get_match_log(
     let mut record = parse_record(&row);
     let error = record.remove("error").unwrap_or(Value::Null);
     let redacted = row.maze_hidden && !caller.is_admin();
+    // The stderr tail is kept with the whole record, not in the row's summary.
+    let stderr_tail = if redacted {
+        String::new()
+    } else {
+        state
+            .storage
+            .get_record(id)
+            .await?
+            .map(|r| r.stderr_tail)
+            .unwrap_or_default()
+    };
     Ok(axum::Json(LogView {
         match_id: id,
         status: row.status,
         step: error.get("step").and_then(Value::as_u64),
         redacted,
-        stderr_tail: (!redacted).then(|| {
-            record
-                .get("stderr_tail")
-                .and_then(Value::as_str)
-                .unwrap_or("")
-                .to_string()
-        }),
+        stderr_tail: (!redacted).then_some(stderr_tail),
         error: (!redacted).then_some(error),
     }))
 }

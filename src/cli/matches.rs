@@ -72,15 +72,14 @@ async fn show(args: ShowArgs) -> anyhow::Result<()> {
         row.tournament_id
             .map_or_else(String::new, |t| format!(", tournament {t}"))
     );
-    let Some(text) = &row.record else {
+    if row.record.is_none() {
         println!("status: {} (not played yet)", row.status);
         return Ok(());
-    };
-    let mut record: MatchRecord = serde_json::from_str(text)
-        .with_context(|| format!("match {}: the stored record cannot be read", row.match_id))?;
-    if let Some(trace) = storage.get_trace(row.match_id).await? {
-        record.trace = serde_json::from_str(&trace).unwrap_or_default();
     }
+    let mut record: MatchRecord = storage
+        .get_record(row.match_id)
+        .await?
+        .with_context(|| format!("match {}: the stored record cannot be read", row.match_id))?;
     let maze = maze_row
         .as_ref()
         .and_then(|m| mazefile::parse(m.layout.as_bytes()).ok());

@@ -5,7 +5,8 @@
 
 use sqlx::FromRow;
 
-use super::{Result, Storage, now_ms};
+use super::{Result, Storage, StorageError, now_ms, records};
+use crate::engine::mazefile;
 use crate::runner::MatchRecord;
 use crate::runner::outcome::{Failure, MatchStatus};
 
@@ -76,6 +77,15 @@ pub struct ClaimedMatch {
     pub tournament_id: Option<i64>,
     /// Environment variables declared for the bot version (JSON object).
     pub env: String,
+}
+
+/// What [`Storage::get_record`] reads.
+#[derive(FromRow)]
+struct StoredRecordRow {
+    summary: Option<String>,
+    encoding: Option<i64>,
+    data: Option<Vec<u8>>,
+    layout: String,
 }
 
 /// Which matches [`Storage::list_matches`] returns.
@@ -197,23 +207,35 @@ impl Storage {
         Ok(done.rows_affected() == 1)
     }
 
-    /// Writes a played match's record, in one transaction, if `owner` still holds it.
-    /// Returns false (and writes nothing) when the lease was lost meanwhile.
+    /// Writes a played match's record, in one transaction, if `owner` still holds it:
+    /// its summary in the match row, the whole record compactly in `match_record` (see
+    /// [`super::records`]). Returns false (and writes nothing) when the lease was lost
+    /// meanwhile.
     ///
     /// # Errors
-    /// Database failures.
+    /// Database failures, or a record that cannot be encoded.
     pub async fn complete_match(
         &self,
         match_id: i64,
         owner: &str,
         record: &MatchRecord,
     ) -> Result<bool> {
-        let summary = serde_json::to_string(&record.summary()).unwrap_or_default();
-        let trace = serde_json::to_string(&record.trace).unwrap_or_default();
+        let fail = |message: String| StorageError::Record { match_id, message };
+        let layout: Option<String> = sqlx::query_scalar(
+            "select z.layout from match m join maze z on z.maze_id = m.maze_id where m.match_id = ?",
+        )
+        .bind(match_id)
+        .fetch_optional(self.pool())
+        .await?;
+        let maze = mazefile::numeric::parse(layout.unwrap_or_default().as_bytes())
+            .map_err(|e| fail(format!("its stored maze is invalid: {e}")))?;
+        let (encoding, data) = records::encode(record, &maze).map_err(fail)?;
+        let summary = serde_json::to_string(&records::summary(record))
+            .map_err(|e| fail(format!("cannot encode the record's summary: {e}")))?;
         let mut tx = self.pool().begin().await?;
         let done = sqlx::query(
             "update match set status = ?, score = ?, run0_steps = ?, run1_steps = ?, total_steps = ?,
-                 record = ?, trace = ?, finished_at = ?, lease_owner = null, lease_expires_at = null
+                 record = ?, trace = null, finished_at = ?, lease_owner = null, lease_expires_at = null
              where match_id = ? and lease_owner = ? and status = 'running'",
         )
         .bind(record.status.as_str())
@@ -222,14 +244,130 @@ impl Storage {
         .bind(record.run1_steps.map(i64::from))
         .bind(i64::from(record.total_steps))
         .bind(summary)
-        .bind(trace)
         .bind(now_ms())
         .bind(match_id)
         .bind(owner)
         .execute(&mut *tx)
         .await?;
+        if done.rows_affected() == 1 {
+            sqlx::query(
+                "insert or replace into match_record (match_id, encoding, data) values (?, ?, ?)",
+            )
+            .bind(match_id)
+            .bind(encoding)
+            .bind(data)
+            .execute(&mut *tx)
+            .await?;
+        }
         tx.commit().await?;
         Ok(done.rows_affected() == 1)
+    }
+
+    /// A played match's whole record with its trace, or its summary alone when the
+    /// server ended it without playing it; `None` while it is not played (or for no
+    /// such match).
+    ///
+    /// # Errors
+    /// Database failures, or a stored record that cannot be read.
+    pub async fn get_record(&self, match_id: i64) -> Result<Option<MatchRecord>> {
+        let row: Option<StoredRecordRow> = sqlx::query_as(
+            "select m.record as summary, r.encoding, r.data, z.layout from match m
+             join maze z on z.maze_id = m.maze_id
+             left join match_record r on r.match_id = m.match_id
+             where m.match_id = ?",
+        )
+        .bind(match_id)
+        .fetch_optional(self.pool())
+        .await?;
+        let Some(StoredRecordRow {
+            summary,
+            encoding,
+            data,
+            layout,
+        }) = row
+        else {
+            return Ok(None);
+        };
+        let fail = |message: String| StorageError::Record { match_id, message };
+        match (encoding, data) {
+            (Some(encoding), Some(data)) => {
+                let maze = mazefile::numeric::parse(layout.as_bytes())
+                    .map_err(|e| fail(format!("its stored maze is invalid: {e}")))?;
+                records::decode(encoding, &data, &maze)
+                    .map(Some)
+                    .map_err(fail)
+            }
+            _ => Ok(summary.and_then(|s| serde_json::from_str(&s).ok())),
+        }
+    }
+
+    /// Moves the records that earlier versions stored inline in the match row (with
+    /// the trace as JSON) to `match_record`, a batch at a time, each batch in one
+    /// transaction. Returns how many were moved.
+    ///
+    /// # Errors
+    /// Database failures. A stored record that cannot be read is left as it was.
+    pub(super) async fn convert_inline_records(&self) -> Result<u64> {
+        const BATCH: i64 = 200;
+        let mut moved = 0u64;
+        let mut after = 0i64;
+        loop {
+            let rows: Vec<(i64, Option<String>, String, String)> = sqlx::query_as(
+                "select m.match_id, m.record, m.trace, z.layout from match m
+                 join maze z on z.maze_id = m.maze_id
+                 where m.trace is not null and m.match_id > ? order by m.match_id limit ?",
+            )
+            .bind(after)
+            .bind(BATCH)
+            .fetch_all(self.pool())
+            .await?;
+            let Some(last) = rows.last() else {
+                break;
+            };
+            after = last.0;
+            let mut tx = self.pool().begin().await?;
+            for (match_id, record, trace, layout) in rows {
+                let whole = record
+                    .as_deref()
+                    .and_then(|r| serde_json::from_str::<MatchRecord>(r).ok())
+                    .zip(serde_json::from_str::<Vec<crate::runner::TraceStep>>(&trace).ok())
+                    .map(|(mut r, t)| {
+                        r.trace = t;
+                        r
+                    });
+                let maze = mazefile::numeric::parse(layout.as_bytes()).ok();
+                let (Some(whole), Some(maze)) = (whole, maze) else {
+                    tracing::warn!(
+                        match_id,
+                        "a stored match record cannot be read; it is left as it was"
+                    );
+                    continue;
+                };
+                let Ok((encoding, data)) = records::encode(&whole, &maze) else {
+                    continue;
+                };
+                let summary = serde_json::to_string(&records::summary(&whole)).unwrap_or_default();
+                sqlx::query(
+                    "insert or replace into match_record (match_id, encoding, data) values (?, ?, ?)",
+                )
+                .bind(match_id)
+                .bind(encoding)
+                .bind(data)
+                .execute(&mut *tx)
+                .await?;
+                sqlx::query("update match set record = ?, trace = null where match_id = ?")
+                    .bind(summary)
+                    .bind(match_id)
+                    .execute(&mut *tx)
+                    .await?;
+                moved += 1;
+            }
+            tx.commit().await?;
+        }
+        if moved > 0 {
+            tracing::info!(moved, "moved match records to their compact storage");
+        }
+        Ok(moved)
     }
 
     /// Marks a match `owner` holds as crashed without a bot record (our own fault,
@@ -292,20 +430,6 @@ impl Storage {
                 .bind(match_id)
                 .fetch_optional(self.pool())
                 .await?,
-        )
-    }
-
-    /// The per-step trace of a played match (JSON array), if any.
-    ///
-    /// # Errors
-    /// Database failures.
-    pub async fn get_trace(&self, match_id: i64) -> Result<Option<String>> {
-        Ok(
-            sqlx::query_scalar::<_, Option<String>>("select trace from match where match_id = ?")
-                .bind(match_id)
-                .fetch_optional(self.pool())
-                .await?
-                .flatten(),
         )
     }
 

@@ -10,6 +10,7 @@ pub mod builds;
 pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
+pub mod records;
 pub mod retries;
 pub mod tournaments;
 
@@ -42,6 +43,14 @@ pub enum StorageError {
     /// The schema could not be applied.
     #[error("database migration failed: {0}")]
     Migrate(#[from] sqlx::migrate::MigrateError),
+    /// A match record could not be encoded, or a stored one read.
+    #[error("match {match_id}: {message}")]
+    Record {
+        /// The match.
+        match_id: i64,
+        /// What went wrong.
+        message: String,
+    },
 }
 
 /// Result alias for storage calls.
@@ -77,7 +86,9 @@ impl Storage {
             .connect_with(options)
             .await?;
         sqlx::migrate!().run(&pool).await?;
-        Ok(Storage { pool })
+        let storage = Storage { pool };
+        storage.convert_inline_records().await?;
+        Ok(storage)
     }
 
     /// The connection pool (for the submodules).

@@ -233,18 +233,14 @@ async fn match_page(
     let hidden = row.maze_hidden;
     let mut record: Option<MatchRecord> = None;
     let mut maze = None;
-    let trace = if hidden {
+    // A hidden maze's match shows no viewer; a record that cannot be read shows the
+    // page without it.
+    let stored = if hidden {
         None
     } else {
-        state.storage.get_trace(id).await?
+        state.storage.get_record(id).await.ok().flatten()
     };
-    // A record that cannot be read shows the page without its viewer.
-    let parsed = row
-        .record
-        .as_deref()
-        .and_then(|text| serde_json::from_str::<MatchRecord>(text).ok());
-    if let (Some(mut r), Some(trace)) = (parsed, trace) {
-        r.trace = serde_json::from_str(&trace).unwrap_or_default();
+    if let Some(mut r) = stored.filter(|_| row.total_steps.is_some()) {
         let m = super::mazes::find_maze(&state, row.maze_id).await?;
         maze = mazefile::parse(m.layout.as_bytes()).ok();
         r.maze_layout = Some(m.layout);

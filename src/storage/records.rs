@@ -1,0 +1,250 @@
+//! How a match's record is stored: compactly, apart from the match row.
+//!
+//! The match row keeps a small summary (what lists, pages and standings need: status,
+//! score, error, warnings, limits, timings). The whole record, with its stderr tail,
+//! notices and per-step trace, is one zstd-compressed value in `match_record`. Its
+//! usual encoding ([`ENCODING_ANSWERS`]) keeps of each step only what the referee cannot
+//! work out again: the bot's answer, its timings, its stderr lines and debug object.
+//! Everything else (sensors, events, positions, headings, warnings) is replayed by the
+//! referee on the maze when the record is read: the rules are a pure function of the
+//! answers. An encoding is only used when replaying it gives back the very same trace
+//! (checked when it is written); otherwise the whole record is kept as JSON
+//! ([`ENCODING_JSON`]).
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::engine::{Action, Game, GameConfig, Maze};
+use crate::runner::{MatchRecord, TraceStep};
+
+/// The whole record as JSON, compressed.
+pub const ENCODING_JSON: i64 = 1;
+/// The record without its trace, and per step only the answers and what the bot
+/// showed, compressed; the rest of each step is replayed on the maze.
+pub const ENCODING_ANSWERS: i64 = 2;
+
+/// The zstd level: about 3 KB for a match of a few hundred steps, a few ms to write.
+const LEVEL: i32 = 9;
+
+/// The part of each step the referee cannot replay, by column.
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct Answers {
+    actions: Vec<Action>,
+    answer_us: Vec<u64>,
+    cpu_us: Vec<Option<u64>>,
+    /// By index in the trace, the steps that have any.
+    stderr: BTreeMap<usize, Vec<String>>,
+    debug: BTreeMap<usize, serde_json::Value>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+struct Stored {
+    record: MatchRecord,
+    steps: Answers,
+}
+
+/// The summary the match row keeps: the record without its trace, stderr tail,
+/// notices and maze layout.
+pub fn summary(record: &MatchRecord) -> MatchRecord {
+    MatchRecord {
+        trace: Vec::new(),
+        stderr_tail: String::new(),
+        notices: Vec::new(),
+        maze_layout: None,
+        ..record.clone()
+    }
+}
+
+/// Encodes `record` of a match on `maze`: its encoding and bytes.
+///
+/// # Errors
+/// The record cannot be serialised or compressed.
+pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), String> {
+    let mut steps = Answers::default();
+    for (i, s) in record.trace.iter().enumerate() {
+        steps.actions.push(s.report.action);
+        steps.answer_us.push(s.answer_us);
+        steps.cpu_us.push(s.cpu_us);
+        if !s.stderr.is_empty() {
+            steps.stderr.insert(i, s.stderr.clone());
+        }
+        if let Some(d) = &s.debug {
+            steps.debug.insert(i, d.clone());
+        }
+    }
+    let stored = Stored {
+        record: MatchRecord {
+            trace: Vec::new(),
+            maze_layout: None,
+            ..record.clone()
+        },
+        steps,
+    };
+    let replays = replay(&stored.steps, maze, record.limits.max_steps)
+        .is_ok_and(|trace| trace == record.trace);
+    let (encoding, json) = if replays {
+        (ENCODING_ANSWERS, serde_json::to_vec(&stored))
+    } else {
+        let mut whole = record.clone();
+        whole.maze_layout = None;
+        (ENCODING_JSON, serde_json::to_vec(&whole))
+    };
+    let json = json.map_err(|e| format!("cannot encode the match record: {e}"))?;
+    let data = zstd::bulk::compress(&json, LEVEL)
+        .map_err(|e| format!("cannot compress the match record: {e}"))?;
+    Ok((encoding, data))
+}
+
+/// Decodes a stored record of a match on `maze`.
+///
+/// # Errors
+/// The bytes are not a record in that encoding, or do not replay on the maze.
+pub fn decode(encoding: i64, data: &[u8], maze: &Maze) -> Result<MatchRecord, String> {
+    let json = zstd::stream::decode_all(data)
+        .map_err(|e| format!("the stored match record cannot be decompressed: {e}"))?;
+    match encoding {
+        ENCODING_JSON => serde_json::from_slice(&json)
+            .map_err(|e| format!("the stored match record is not valid: {e}")),
+        ENCODING_ANSWERS => {
+            let stored: Stored = serde_json::from_slice(&json)
+                .map_err(|e| format!("the stored match record is not valid: {e}"))?;
+            let mut record = stored.record;
+            record.trace = replay(&stored.steps, maze, record.limits.max_steps)?;
+            Ok(record)
+        }
+        other => Err(format!("unknown match record encoding {other}")),
+    }
+}
+
+/// Plays the stored answers again on `maze`.
+fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>, String> {
+    let n = steps.actions.len();
+    if steps.answer_us.len() != n || steps.cpu_us.len() != n {
+        return Err("the stored steps' columns differ in length".into());
+    }
+    let mut game = Game::new(maze.clone(), GameConfig { max_steps });
+    let mut trace = Vec::with_capacity(n);
+    for i in 0..n {
+        if game.begin_step().is_none() {
+            return Err(format!(
+                "the stored answers go on after the match ended (step {})",
+                i + 1
+            ));
+        }
+        trace.push(TraceStep {
+            report: game.apply(steps.actions[i]),
+            answer_us: steps.answer_us[i],
+            cpu_us: steps.cpu_us[i],
+            stderr: steps.stderr.get(&i).cloned().unwrap_or_default(),
+            debug: steps.debug.get(&i).cloned(),
+        });
+    }
+    Ok(trace)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::{generator, solver};
+    use crate::runner::{LimitsRecord, MatchStatus, Timings};
+
+    /// A record as the runner makes it: `actions` played on `maze`, with timings,
+    /// stderr lines and debug objects on some steps.
+    fn played(maze: &Maze, actions: &[Action]) -> MatchRecord {
+        let mut game = Game::new(maze.clone(), GameConfig { max_steps: 1000 });
+        let mut trace = Vec::new();
+        for (i, a) in actions.iter().enumerate() {
+            game.begin_step().unwrap();
+            trace.push(TraceStep {
+                report: game.apply(*a),
+                answer_us: 100 + i as u64 * 7,
+                cpu_us: (i % 2 == 0).then_some(40),
+                stderr: if i % 3 == 0 {
+                    vec![format!("step {i}")]
+                } else {
+                    Vec::new()
+                },
+                debug: (i % 4 == 0).then(|| serde_json::json!({"text": format!("at {i}")})),
+            });
+        }
+        MatchRecord {
+            engine_version: "t".into(),
+            protocol: 1,
+            maze_hash: maze.hash(),
+            maze_dim: maze.dim(),
+            seed: 3,
+            limits: LimitsRecord {
+                max_steps: 1000,
+                startup_timeout_ms: None,
+                move_timeout_ms: None,
+                memory_limit_mb: None,
+                process_limit: None,
+                scratch_mb: None,
+                sandbox: "none".into(),
+            },
+            status: MatchStatus::StepLimit,
+            score: None,
+            run0_steps: None,
+            run1_steps: None,
+            total_steps: game.t(),
+            warnings: game.warnings().to_vec(),
+            error: None,
+            stderr_tail: "the tail\n".into(),
+            timings: Timings::default(),
+            bot_pid: Some(9),
+            core: Some(1),
+            notices: Vec::new(),
+            maze_layout: None,
+            trace,
+        }
+    }
+
+    #[test]
+    fn a_record_keeps_only_the_answers_and_reads_back_the_same() {
+        let maze = generator::generate(12, 4).unwrap();
+        let mut actions = solver::solve(&maze).unwrap().actions;
+        // Lenient answers (warned, clamped) and a reset replay the same too.
+        actions.insert(2, Action::turn_move(45, 7));
+        actions.push(Action::RESET);
+        actions.extend(solver::solve(&maze).unwrap().actions);
+        let record = played(&maze, &actions);
+        assert!(!record.warnings.is_empty());
+        let (encoding, data) = encode(&record, &maze).unwrap();
+        assert_eq!(encoding, ENCODING_ANSWERS);
+        let back = decode(encoding, &data, &maze).unwrap();
+        assert_eq!(back, record);
+        let json = serde_json::to_vec(&record).unwrap();
+        assert!(
+            data.len() * 5 < json.len(),
+            "{} of {}",
+            data.len(),
+            json.len()
+        );
+    }
+
+    #[test]
+    fn a_trace_that_does_not_replay_is_kept_whole() {
+        let maze = generator::generate(12, 4).unwrap();
+        let mut record = played(&maze, &solver::solve(&maze).unwrap().actions);
+        record.trace[1].report.sensors = [9, 9, 9];
+        let (encoding, data) = encode(&record, &maze).unwrap();
+        assert_eq!(encoding, ENCODING_JSON);
+        assert_eq!(decode(encoding, &data, &maze).unwrap(), record);
+        // Bytes that are not a record are an error, not a panic.
+        assert!(decode(ENCODING_ANSWERS, b"nonsense", &maze).is_err());
+        assert!(decode(7, &data, &maze).is_err());
+    }
+
+    #[test]
+    fn the_summary_leaves_out_the_bulky_parts() {
+        let maze = generator::generate(12, 4).unwrap();
+        let record = played(&maze, &solver::solve(&maze).unwrap().actions);
+        let s = summary(&record);
+        assert!(s.trace.is_empty() && s.stderr_tail.is_empty());
+        assert_eq!(
+            (s.status, s.total_steps),
+            (record.status, record.total_steps)
+        );
+    }
+}
