@@ -289,15 +289,17 @@ impl Storage {
             return Ok(None);
         };
         let fail = |message: String| StorageError::Record { match_id, message };
+        let summary: Option<MatchRecord> = summary.and_then(|s| serde_json::from_str(&s).ok());
         match (encoding, data) {
             (Some(encoding), Some(data)) => {
+                let summary = summary.ok_or_else(|| fail("its summary cannot be read".into()))?;
                 let maze = mazefile::numeric::parse(layout.as_bytes())
                     .map_err(|e| fail(format!("its stored maze is invalid: {e}")))?;
-                records::decode(encoding, &data, &maze)
+                records::decode(encoding, &data, summary, &maze)
                     .map(Some)
                     .map_err(fail)
             }
-            _ => Ok(summary.and_then(|s| serde_json::from_str(&s).ok())),
+            _ => Ok(summary),
         }
     }
 

@@ -30,7 +30,10 @@ const LEVEL: i32 = 9;
 /// The part of each step the referee cannot replay, by column.
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct Answers {
-    actions: Vec<Action>,
+    /// Each answer as a small number (see [`action_code`]); 255: in `other_actions`.
+    actions: Vec<u8>,
+    /// The answers outside the rules (played leniently), by index in the trace.
+    other_actions: BTreeMap<usize, Action>,
     answer_us: Vec<u64>,
     cpu_us: Vec<Option<u64>>,
     /// By index in the trace, the steps that have any.
@@ -38,10 +41,41 @@ struct Answers {
     debug: BTreeMap<usize, serde_json::Value>,
 }
 
+/// What the compact encoding stores besides the row's summary.
 #[derive(Debug, Serialize, Deserialize)]
 struct Stored {
-    record: MatchRecord,
+    stderr_tail: String,
+    notices: Vec<crate::runner::outcome::Notice>,
     steps: Answers,
+}
+
+/// An answer within the rules as a number: 0-20 for a rotation of -90, 0 or 90 and a
+/// movement of -3 to 3, 21 for a reset.
+fn action_code(action: Action) -> Option<u8> {
+    match action {
+        Action::Reset { reset: true } => Some(21),
+        Action::Move { rotation, movement } if (-3..=3).contains(&movement) => {
+            let turn = match rotation {
+                -90 => 0,
+                0 => 1,
+                90 => 2,
+                _ => return None,
+            };
+            Some(turn * 7 + (movement + 3) as u8)
+        }
+        _ => None,
+    }
+}
+
+fn code_action(code: u8) -> Option<Action> {
+    match code {
+        21 => Some(Action::RESET),
+        0..=20 => Some(Action::turn_move(
+            (i64::from(code) / 7 - 1) * 90,
+            i64::from(code) % 7 - 3,
+        )),
+        _ => None,
+    }
 }
 
 /// The summary the match row keeps: the record without its trace, stderr tail,
@@ -56,14 +90,19 @@ pub fn summary(record: &MatchRecord) -> MatchRecord {
     }
 }
 
-/// Encodes `record` of a match on `maze`: its encoding and bytes.
+/// Encodes `record` of a match on `maze`: its encoding and bytes. With
+/// [`ENCODING_ANSWERS`], the bytes complete the row's [`summary`] of the record.
 ///
 /// # Errors
 /// The record cannot be serialised or compressed.
 pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), String> {
     let mut steps = Answers::default();
     for (i, s) in record.trace.iter().enumerate() {
-        steps.actions.push(s.report.action);
+        let action = s.report.action;
+        steps.actions.push(action_code(action).unwrap_or(255));
+        if action_code(action).is_none() {
+            steps.other_actions.insert(i, action);
+        }
         steps.answer_us.push(s.answer_us);
         steps.cpu_us.push(s.cpu_us);
         if !s.stderr.is_empty() {
@@ -74,11 +113,8 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
         }
     }
     let stored = Stored {
-        record: MatchRecord {
-            trace: Vec::new(),
-            maze_layout: None,
-            ..record.clone()
-        },
+        stderr_tail: record.stderr_tail.clone(),
+        notices: record.notices.clone(),
         steps,
     };
     let replays = replay(&stored.steps, maze, record.limits.max_steps)
@@ -96,11 +132,16 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
     Ok((encoding, data))
 }
 
-/// Decodes a stored record of a match on `maze`.
+/// Decodes a stored record of a match on `maze`, whose row keeps `summary`.
 ///
 /// # Errors
 /// The bytes are not a record in that encoding, or do not replay on the maze.
-pub fn decode(encoding: i64, data: &[u8], maze: &Maze) -> Result<MatchRecord, String> {
+pub fn decode(
+    encoding: i64,
+    data: &[u8],
+    summary: MatchRecord,
+    maze: &Maze,
+) -> Result<MatchRecord, String> {
     let json = zstd::stream::decode_all(data)
         .map_err(|e| format!("the stored match record cannot be decompressed: {e}"))?;
     match encoding {
@@ -109,9 +150,13 @@ pub fn decode(encoding: i64, data: &[u8], maze: &Maze) -> Result<MatchRecord, St
         ENCODING_ANSWERS => {
             let stored: Stored = serde_json::from_slice(&json)
                 .map_err(|e| format!("the stored match record is not valid: {e}"))?;
-            let mut record = stored.record;
-            record.trace = replay(&stored.steps, maze, record.limits.max_steps)?;
-            Ok(record)
+            let trace = replay(&stored.steps, maze, summary.limits.max_steps)?;
+            Ok(MatchRecord {
+                stderr_tail: stored.stderr_tail,
+                notices: stored.notices,
+                trace,
+                ..summary
+            })
         }
         other => Err(format!("unknown match record encoding {other}")),
     }
@@ -132,8 +177,13 @@ fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>
                 i + 1
             ));
         }
+        let action = match steps.other_actions.get(&i) {
+            Some(a) => *a,
+            None => code_action(steps.actions[i])
+                .ok_or_else(|| format!("step {}: no such stored answer", i + 1))?,
+        };
         trace.push(TraceStep {
-            report: game.apply(steps.actions[i]),
+            report: game.apply(action),
             answer_us: steps.answer_us[i],
             cpu_us: steps.cpu_us[i],
             stderr: steps.stderr.get(&i).cloned().unwrap_or_default(),
@@ -212,8 +262,11 @@ mod tests {
         assert!(!record.warnings.is_empty());
         let (encoding, data) = encode(&record, &maze).unwrap();
         assert_eq!(encoding, ENCODING_ANSWERS);
-        let back = decode(encoding, &data, &maze).unwrap();
+        let back = decode(encoding, &data, summary(&record), &maze).unwrap();
         assert_eq!(back, record);
+        for code in 0..=21 {
+            assert_eq!(action_code(code_action(code).unwrap()), Some(code));
+        }
         let json = serde_json::to_vec(&record).unwrap();
         assert!(
             data.len() * 5 < json.len(),
@@ -230,10 +283,11 @@ mod tests {
         record.trace[1].report.sensors = [9, 9, 9];
         let (encoding, data) = encode(&record, &maze).unwrap();
         assert_eq!(encoding, ENCODING_JSON);
-        assert_eq!(decode(encoding, &data, &maze).unwrap(), record);
+        let s = || summary(&record);
+        assert_eq!(decode(encoding, &data, s(), &maze).unwrap(), record);
         // Bytes that are not a record are an error, not a panic.
-        assert!(decode(ENCODING_ANSWERS, b"nonsense", &maze).is_err());
-        assert!(decode(7, &data, &maze).is_err());
+        assert!(decode(ENCODING_ANSWERS, b"nonsense", s(), &maze).is_err());
+        assert!(decode(7, &data, s(), &maze).is_err());
     }
 
     #[test]

@@ -180,11 +180,12 @@ fn spinning_children_are_counted_in_the_cpu_time_and_die_with_the_match() {
         ms(&r, "wall_ms"),
         ms(&calm, "bot_cpu_ms"),
     );
-    // The spinners share the match's one core with the bot and the referee (and with
-    // whatever else the machine runs there), so they get a good part of it, and all of
-    // it is counted.
+    // The spinners share the match's one core with the bot and the referee, and with
+    // whatever else the machine runs there (under the test suite's load, several other
+    // busy processes), so they get some part of it, and all of it is counted. Without
+    // them counted, the two CPU times would be about the same.
     assert!(
-        cpu >= calm_cpu + wall / 4,
+        cpu >= calm_cpu + (wall / 10).max(50),
         "cpu {cpu} ms (without spinners {calm_cpu} ms) over a wall time of {wall} ms: {r}"
     );
 }
