@@ -99,31 +99,13 @@ pub(super) struct MatchResult {
     step: Option<u64>,
 }
 
-/// Every match of a tournament with its bot's and maze's names.
+/// Every match of a tournament with its bot's and maze's names (one query).
 pub(super) async fn results(
     storage: &Storage,
     tournament_id: i64,
 ) -> anyhow::Result<Vec<MatchResult>> {
     let mut out = Vec::new();
-    let mut bot_names = std::collections::BTreeMap::new();
-    let mut maze_names = std::collections::BTreeMap::new();
     for row in storage.tournament_matches(tournament_id).await? {
-        if let std::collections::btree_map::Entry::Vacant(e) = bot_names.entry(row.bot_id) {
-            e.insert(
-                storage
-                    .get_bot(row.bot_id)
-                    .await?
-                    .map_or_else(String::new, |b| b.name),
-            );
-        }
-        if let std::collections::btree_map::Entry::Vacant(e) = maze_names.entry(row.maze_id) {
-            e.insert(
-                storage
-                    .get_maze(row.maze_id)
-                    .await?
-                    .map_or_else(String::new, |m| m.name),
-            );
-        }
         let error = row
             .record
             .as_deref()
@@ -141,8 +123,8 @@ pub(super) async fn results(
                 .as_ref()
                 .and_then(|e| e.get("step"))
                 .and_then(serde_json::Value::as_u64),
-            bot: bot_names[&row.bot_id].clone(),
-            maze: maze_names[&row.maze_id].clone(),
+            bot: row.bot_name,
+            maze: row.maze_name,
             repeat: row.repeat.unwrap_or(0),
             status: row.status,
             run0_steps: row.run0_steps,

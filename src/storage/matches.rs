@@ -24,10 +24,14 @@ pub struct MatchRow {
     pub bot_version_id: i64,
     /// Its bot.
     pub bot_id: i64,
+    /// The bot's name.
+    pub bot_name: String,
     /// The bot version's number.
     pub version: i64,
     /// The maze.
     pub maze_id: i64,
+    /// The maze's name.
+    pub maze_name: String,
     /// Whether the maze is hidden.
     pub maze_hidden: bool,
     /// The seed sent to the bot.
@@ -110,10 +114,11 @@ pub struct Page {
     pub limit: i64,
 }
 
-const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, v.version, m.maze_id,
-        z.hidden as maze_hidden, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
+const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
+        z.name as maze_name, z.hidden as maze_hidden, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
         m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at
      from match m join bot_version v on v.bot_version_id = m.bot_version_id
+     join bot b on b.bot_id = v.bot_id
      join maze z on z.maze_id = m.maze_id";
 
 impl Storage {
