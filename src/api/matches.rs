@@ -229,11 +229,8 @@ async fn get_match(
 
 /// A match as the caller may see it (`reveal`: not a hidden maze's, or the admin).
 pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
-    let record = parse_record(&row);
-    let field = |k: &str| match record.get(k) {
-        Some(v) if reveal => v.clone(),
-        _ => Value::Null,
-    };
+    let summary = row.summary();
+    let json = |v: Option<serde_json::Result<Value>>| v.and_then(Result::ok).unwrap_or(Value::Null);
     MatchView {
         match_id: row.match_id,
         bot_id: row.bot_id,
@@ -250,19 +247,18 @@ pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
         started_at: row.started_at,
         finished_at: row.finished_at,
         maze_hidden: row.maze_hidden,
-        warnings: match record.get("warnings") {
-            _ if !reveal => Value::Null,
-            Some(w) => w.clone(),
-            None => Value::Array(vec![]),
-        },
-        limits: record.get("limits").cloned().unwrap_or(Value::Null),
-        maze_hash: field("maze_hash").as_str().map(String::from),
-        maze_dim: field("maze_dim").as_i64(),
-        engine_version: record
-            .get("engine_version")
-            .and_then(Value::as_str)
-            .map(String::from),
-        timings: field("timings"),
+        warnings: json(reveal.then(|| serde_json::to_value(&summary.warnings))),
+        limits: json(summary.limits.as_ref().map(serde_json::to_value)),
+        maze_hash: summary.maze_hash.filter(|_| reveal),
+        maze_dim: summary.maze_dim.filter(|_| reveal).map(i64::from),
+        engine_version: summary.engine_version,
+        timings: json(
+            summary
+                .timings
+                .filter(|_| reveal)
+                .as_ref()
+                .map(serde_json::to_value),
+        ),
         status: row.status,
     }
 }
@@ -356,8 +352,7 @@ async fn get_match_log(
 ) -> ApiResult<axum::Json<LogView>> {
     let row = find_match(&state, id).await?;
     caller.require_owner(&state, row.bot_id).await?;
-    let mut record = parse_record(&row);
-    let error = record.remove("error").unwrap_or(Value::Null);
+    let error = row.summary().error;
     let redacted = row.maze_hidden && !caller.is_admin();
     // The stderr tail is kept with the whole record, not in the row's summary.
     let stderr_tail = if redacted {
@@ -373,10 +368,10 @@ async fn get_match_log(
     Ok(axum::Json(LogView {
         match_id: id,
         status: row.status,
-        step: error.get("step").and_then(Value::as_u64),
+        step: error.as_ref().and_then(|e| e.step).map(u64::from),
         redacted,
         stderr_tail: (!redacted).then_some(stderr_tail),
-        error: (!redacted).then_some(error),
+        error: (!redacted).then(|| serde_json::to_value(&error).unwrap_or(Value::Null)),
     }))
 }
 
@@ -394,17 +389,6 @@ async fn find_match(state: &AppState, id: i64) -> ApiResult<MatchRow> {
         .get_match(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))
-}
-
-pub(super) fn parse_record(row: &MatchRow) -> serde_json::Map<String, Value> {
-    row.record
-        .as_deref()
-        .and_then(|r| serde_json::from_str::<Value>(r).ok())
-        .and_then(|v| match v {
-            Value::Object(map) => Some(map),
-            _ => None,
-        })
-        .unwrap_or_default()
 }
 
 /// Refuses new matches beyond the queue's capacity (429 with Retry-After).

@@ -106,23 +106,11 @@ pub(super) async fn results(
 ) -> anyhow::Result<Vec<MatchResult>> {
     let mut out = Vec::new();
     for row in storage.tournament_matches(tournament_id).await? {
-        let error = row
-            .record
-            .as_deref()
-            .and_then(|r| serde_json::from_str::<serde_json::Value>(r).ok())
-            .and_then(|v| v.get("error").cloned())
-            .filter(|e| !e.is_null());
+        let error = row.summary().error;
         out.push(MatchResult {
             match_id: row.match_id,
-            reason: error
-                .as_ref()
-                .and_then(|e| e.get("reason"))
-                .and_then(|r| r.as_str())
-                .map(String::from),
-            step: error
-                .as_ref()
-                .and_then(|e| e.get("step"))
-                .and_then(serde_json::Value::as_u64),
+            reason: error.as_ref().map(|e| e.reason.clone()),
+            step: error.as_ref().and_then(|e| e.step).map(u64::from),
             bot: row.bot_name,
             maze: row.maze_name,
             repeat: row.repeat.unwrap_or(0),

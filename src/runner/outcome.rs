@@ -222,3 +222,48 @@ impl MatchRecord {
         }
     }
 }
+
+/// What a match row keeps of its record: the record without its trace, stderr tail and
+/// notices, for lists and pages. Every field is optional: a match the server ended
+/// without playing it (aborted, or its build failed) has only a status and an error.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct MatchSummary {
+    /// The version of the referee that played it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub engine_version: Option<String>,
+    /// SHA-256 of the maze's canonical text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub maze_hash: Option<String>,
+    /// The maze's dimension.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub maze_dim: Option<u32>,
+    /// The limits it was played under.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<LimitsRecord>,
+    /// How it ended.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub status: Option<MatchStatus>,
+    /// Lenient-rule warnings.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<Warning>,
+    /// Why it did not finish, if it failed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<Failure>,
+    /// How long things took.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timings: Option<Timings>,
+}
+
+impl MatchSummary {
+    /// The summary of a match the server ended with `status` without playing it.
+    pub fn unplayed(status: MatchStatus, reason: &str) -> MatchSummary {
+        MatchSummary {
+            status: Some(status),
+            error: Some(Failure {
+                reason: reason.to_string(),
+                ..Failure::default()
+            }),
+            ..MatchSummary::default()
+        }
+    }
+}

@@ -304,7 +304,7 @@ pub(super) async fn pause_bot_in(
     .bind(failure_record(
         MatchStatus::Aborted,
         &format!("bot paused: {reason}"),
-    ))
+    )?)
     .bind(now)
     .bind(bot_id)
     .execute(&mut *tx)

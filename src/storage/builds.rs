@@ -73,7 +73,7 @@ impl Storage {
             .bind(failure_record(
                 MatchStatus::Crashed,
                 &format!("the bot version's build failed: {tail}"),
-            ))
+            )?)
             .bind(now)
             .bind(bot_version_id)
             .execute(&mut *tx)

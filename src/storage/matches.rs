@@ -8,7 +8,7 @@ use sqlx::FromRow;
 use super::{Result, Storage, StorageError, now_ms, records};
 use crate::engine::mazefile;
 use crate::runner::MatchRecord;
-use crate::runner::outcome::{Failure, MatchStatus};
+use crate::runner::outcome::{MatchStatus, MatchSummary};
 
 /// Priority of single matches: they run before tournament matches.
 pub const PRIORITY_SINGLE: i64 = 0;
@@ -62,6 +62,17 @@ pub struct MatchRow {
     pub started_at: Option<i64>,
     /// Finished at (unix ms).
     pub finished_at: Option<i64>,
+}
+
+impl MatchRow {
+    /// The row's summary of the record (empty while the match is not played; a summary
+    /// that cannot be read counts as empty).
+    pub fn summary(&self) -> MatchSummary {
+        self.record
+            .as_deref()
+            .and_then(|r| serde_json::from_str(r).ok())
+            .unwrap_or_default()
+    }
 }
 
 /// A match a worker has claimed, with what it needs to play it.
@@ -383,7 +394,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn fail_match(&self, match_id: i64, owner: &str, reason: &str) -> Result<bool> {
-        let record = failure_record(MatchStatus::Crashed, reason);
+        let record = failure_record(MatchStatus::Crashed, reason)?;
         let done = sqlx::query(
             "update match set status = 'crashed', record = ?, finished_at = ?,
                  lease_owner = null, lease_expires_at = null
@@ -501,13 +512,14 @@ impl Storage {
     }
 }
 
-/// The record (JSON) of a match the server ended without a record from the runner.
-pub(super) fn failure_record(status: MatchStatus, reason: &str) -> String {
-    serde_json::json!({
-        "status": status,
-        "error": Failure { reason: reason.to_string(), ..Failure::default() },
+/// The summary (JSON, for the row) of a match the server ended without playing it.
+pub(super) fn failure_record(status: MatchStatus, reason: &str) -> Result<String> {
+    serde_json::to_string(&MatchSummary::unplayed(status, reason)).map_err(|e| {
+        StorageError::Encode {
+            what: "a match summary",
+            message: e.to_string(),
+        }
     })
-    .to_string()
 }
 
 #[cfg(test)]

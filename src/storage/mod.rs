@@ -43,6 +43,14 @@ pub enum StorageError {
     /// The schema could not be applied.
     #[error("database migration failed: {0}")]
     Migrate(#[from] sqlx::migrate::MigrateError),
+    /// A value could not be encoded for storing.
+    #[error("cannot encode {what}: {message}")]
+    Encode {
+        /// What was being encoded.
+        what: &'static str,
+        /// What serde said.
+        message: String,
+    },
     /// A match record could not be encoded, or a stored one read.
     #[error("match {match_id}: {message}")]
     Record {

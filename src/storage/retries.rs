@@ -49,7 +49,7 @@ impl Storage {
     /// Database failures.
     pub async fn reap_expired(&self) -> Result<Reaped> {
         let now = now_ms();
-        let aborted_record = failure_record(MatchStatus::Aborted, &retries_exhausted_reason());
+        let aborted_record = failure_record(MatchStatus::Aborted, &retries_exhausted_reason())?;
         let mut tx = self.pool().begin().await?;
         // Write first, so the transaction holds the write lock from its start. In an
         // update every expression reads the row as it was before it.

@@ -16,7 +16,6 @@ use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppPath, AppQuery};
 use super::leaderboard::for_caller;
 use super::lists::{MatchListQuery, page};
-use super::matches::parse_record;
 use crate::engine::{mazefile, render, solver};
 use crate::runner::MatchRecord;
 use crate::storage::leaderboard::Scope;
@@ -90,16 +89,15 @@ impl Names {
 /// A failure's reason as anyone may see it: on a hidden maze only its step (the text
 /// could carry what the bot sensed).
 fn public_reason(row: &MatchRow) -> Option<String> {
-    let record = parse_record(row);
-    let error = record.get("error").filter(|e| !e.is_null())?;
-    let step = error.get("step").and_then(serde_json::Value::as_u64);
+    let error = row.summary().error?;
+    let step = error.step;
     if row.maze_hidden {
         return Some(step.map_or_else(
             || "failed (hidden maze: details for the admin only)".into(),
             |s| format!("failed at step {s} (hidden maze: details for the admin only)"),
         ));
     }
-    let reason = error.get("reason").and_then(|r| r.as_str()).unwrap_or("");
+    let reason = error.reason.as_str();
     Some(match step {
         Some(s) if !reason.contains(&format!("step {s}")) => format!("step {s}: {reason}"),
         _ => reason.to_string(),
