@@ -10,6 +10,7 @@ use prometheus_client::metrics::gauge::Gauge;
 use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
 
+use crate::runner::MatchState;
 use crate::storage::Storage;
 
 #[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
@@ -81,19 +82,8 @@ impl Metrics {
     /// Database failures.
     pub async fn render(&self, storage: &Storage) -> Result<String, crate::storage::StorageError> {
         let counts = storage.count_by_status().await?;
-        for status in [
-            "queued",
-            "running",
-            "finished",
-            "step_limit",
-            "timeout",
-            "crashed",
-            "protocol_error",
-            "memory_limit",
-            "process_limit",
-            "scratch_limit",
-            "aborted",
-        ] {
+        for state in MatchState::ALL {
+            let status = state.as_str();
             let n = counts
                 .iter()
                 .find(|(s, _)| s == status)
@@ -104,7 +94,7 @@ impl Metrics {
                     status: status.to_string(),
                 })
                 .set(n);
-            if status == "queued" {
+            if state == MatchState::Queued {
                 self.inner.queue_depth.set(n);
             }
         }

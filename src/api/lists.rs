@@ -6,6 +6,7 @@ use utoipa::{IntoParams, ToSchema};
 
 use super::error::{ApiError, ApiResult};
 use super::matches::MatchView;
+use crate::runner::MatchState;
 use crate::storage::matches::{MatchFilter, Page};
 
 /// Filters and page of `GET /api/matches`.
@@ -40,40 +41,19 @@ pub struct MatchPage {
     pub limit: i64,
 }
 
-/// Every status a match can have.
-pub const STATUSES: [&str; 11] = [
-    "queued",
-    "running",
-    "finished",
-    "step_limit",
-    "timeout",
-    "crashed",
-    "protocol_error",
-    "memory_limit",
-    "process_limit",
-    "scratch_limit",
-    "aborted",
-];
-
 impl MatchListQuery {
     /// The storage filter and page, or a 400 naming the bad parameter.
     pub fn parse(&self) -> ApiResult<(MatchFilter, Page)> {
-        if let Some(s) = self
-            .status
-            .as_ref()
-            .filter(|s| !STATUSES.contains(&s.as_str()))
-        {
-            return Err(ApiError::BadRequest(format!(
-                "unknown status {s:?}: use one of {}",
-                STATUSES.join(", ")
-            )));
-        }
+        let status = match &self.status {
+            Some(s) => Some(s.parse::<MatchState>().map_err(ApiError::BadRequest)?),
+            None => None,
+        };
         Ok((
             MatchFilter {
                 bot_id: self.bot_id,
                 tournament_id: self.tournament_id,
                 maze_id: self.maze_id,
-                status: self.status.clone(),
+                status,
             },
             page(self.offset, self.limit)?,
         ))

@@ -259,7 +259,7 @@ pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
                 .as_ref()
                 .map(serde_json::to_value),
         ),
-        status: row.status,
+        status: row.status.to_string(),
     }
 }
 
@@ -328,7 +328,7 @@ async fn get_match_replay(
     let maze = find_maze(&state, row.maze_id).await?;
     Ok(axum::Json(ReplayView {
         match_id: id,
-        status: row.status,
+        status: row.status.to_string(),
         maze_id: maze.maze_id,
         maze_dim: maze.dim,
         maze_layout: (!maze.hidden || caller.is_admin()).then_some(maze.layout),
@@ -367,7 +367,7 @@ async fn get_match_log(
     };
     Ok(axum::Json(LogView {
         match_id: id,
-        status: row.status,
+        status: row.status.to_string(),
         step: error.as_ref().and_then(|e| e.step).map(u64::from),
         redacted,
         stderr_tail: (!redacted).then_some(stderr_tail),

@@ -114,7 +114,7 @@ pub(super) async fn results(
             bot: row.bot_name,
             maze: row.maze_name,
             repeat: row.repeat.unwrap_or(0),
-            status: row.status,
+            status: row.status.to_string(),
             run0_steps: row.run0_steps,
             run1_steps: row.run1_steps,
             score: row.score,

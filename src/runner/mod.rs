@@ -22,7 +22,9 @@ use std::time::{Duration, Instant};
 
 use crate::engine::{Game, GameConfig, GameEnd, Maze};
 use crate::protocol::{PROTOCOL_VERSION, ServerMessage};
-pub use outcome::{Failure, LimitHit, LimitsRecord, MatchRecord, MatchStatus, Timings, TraceStep};
+pub use outcome::{
+    Failure, LimitHit, LimitsRecord, MatchRecord, MatchState, MatchStatus, Timings, TraceStep,
+};
 pub use sandbox::Sandbox;
 use session::{Session, Verdict};
 

@@ -52,6 +52,95 @@ impl std::fmt::Display for MatchStatus {
     }
 }
 
+/// Where a match is: waiting in the queue, being played, or ended with a final status.
+/// Its wire and database name is [`MatchState::as_str`] (`queued`, `running`, or the
+/// status's name).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MatchState {
+    /// Waiting for a worker.
+    Queued,
+    /// A worker holds it and plays it.
+    Running,
+    /// Ended with this status.
+    #[serde(untagged)]
+    Ended(MatchStatus),
+}
+
+impl MatchState {
+    /// Every state, the queue's first.
+    pub const ALL: [MatchState; 11] = [
+        MatchState::Queued,
+        MatchState::Running,
+        MatchState::Ended(MatchStatus::Finished),
+        MatchState::Ended(MatchStatus::StepLimit),
+        MatchState::Ended(MatchStatus::Timeout),
+        MatchState::Ended(MatchStatus::Crashed),
+        MatchState::Ended(MatchStatus::ProtocolError),
+        MatchState::Ended(MatchStatus::MemoryLimit),
+        MatchState::Ended(MatchStatus::ProcessLimit),
+        MatchState::Ended(MatchStatus::ScratchLimit),
+        MatchState::Ended(MatchStatus::Aborted),
+    ];
+
+    /// The wire and database name, e.g. `queued` or `step_limit`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MatchState::Queued => "queued",
+            MatchState::Running => "running",
+            MatchState::Ended(status) => status.as_str(),
+        }
+    }
+
+    /// The final status, once the match has ended.
+    pub fn ended(self) -> Option<MatchStatus> {
+        match self {
+            MatchState::Ended(status) => Some(status),
+            _ => None,
+        }
+    }
+}
+
+impl From<MatchStatus> for MatchState {
+    fn from(status: MatchStatus) -> Self {
+        MatchState::Ended(status)
+    }
+}
+
+impl std::str::FromStr for MatchState {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        MatchState::ALL
+            .into_iter()
+            .find(|m| m.as_str() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = MatchState::ALL.iter().map(|m| m.as_str()).collect();
+                format!("unknown status {s:?}: use one of {}", names.join(", "))
+            })
+    }
+}
+
+impl TryFrom<String> for MatchState {
+    type Error = String;
+
+    fn try_from(s: String) -> Result<Self, Self::Error> {
+        s.parse()
+    }
+}
+
+impl std::fmt::Display for MatchState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for MatchState {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
 /// Why a bot's match ended early: kept with the record so the bot's author can see it.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Failure {
@@ -265,5 +354,29 @@ impl MatchSummary {
             }),
             ..MatchSummary::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_state_has_one_name_on_the_wire_and_in_the_database() {
+        for state in MatchState::ALL {
+            let name = state.as_str();
+            assert_eq!(name.parse::<MatchState>(), Ok(state));
+            assert_eq!(serde_json::to_value(state).unwrap(), name);
+            assert_eq!(
+                serde_json::from_value::<MatchState>(name.into()).unwrap(),
+                state
+            );
+            if let Some(status) = state.ended() {
+                assert_eq!(status.as_str(), name);
+                assert_eq!(MatchState::from(status), state);
+            }
+        }
+        let err = "done".parse::<MatchState>().unwrap_err();
+        assert!(err.contains("queued") && err.contains("aborted"), "{err}");
     }
 }

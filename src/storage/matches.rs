@@ -8,7 +8,7 @@ use sqlx::FromRow;
 use super::{Result, Storage, StorageError, now_ms, records};
 use crate::engine::mazefile;
 use crate::runner::MatchRecord;
-use crate::runner::outcome::{MatchStatus, MatchSummary};
+use crate::runner::outcome::{MatchState, MatchStatus, MatchSummary};
 
 /// Priority of single matches: they run before tournament matches.
 pub const PRIORITY_SINGLE: i64 = 0;
@@ -40,8 +40,9 @@ pub struct MatchRow {
     pub tournament_id: Option<i64>,
     /// Repetition index within the tournament.
     pub repeat: Option<i64>,
-    /// queued, running, or a final status.
-    pub status: String,
+    /// Queued, running, or its final status.
+    #[sqlx(try_from = "String")]
+    pub status: MatchState,
     /// How many times a worker started it.
     pub attempts: i64,
     /// How many times its lease expired while it ran (its server died).
@@ -112,8 +113,8 @@ pub struct MatchFilter {
     pub tournament_id: Option<i64>,
     /// Only this maze's.
     pub maze_id: Option<i64>,
-    /// Only matches in this status.
-    pub status: Option<String>,
+    /// Only matches in this state.
+    pub status: Option<MatchState>,
 }
 
 /// One page of a list: at most `limit` rows after skipping `offset`.
@@ -469,7 +470,7 @@ impl Storage {
         .bind(filter.bot_id)
         .bind(filter.tournament_id)
         .bind(filter.maze_id)
-        .bind(filter.status.as_deref())
+        .bind(filter.status.map(MatchState::as_str))
         .bind(page.limit)
         .bind(page.offset)
         .fetch_all(self.pool())
@@ -480,7 +481,7 @@ impl Storage {
         .bind(filter.bot_id)
         .bind(filter.tournament_id)
         .bind(filter.maze_id)
-        .bind(filter.status.as_deref())
+        .bind(filter.status.map(MatchState::as_str))
         .fetch_one(self.pool())
         .await?;
         Ok((rows, total))

@@ -17,7 +17,7 @@ use super::error::{ApiError, ApiResult, AppPath, AppQuery};
 use super::leaderboard::for_caller;
 use super::lists::{MatchListQuery, page};
 use crate::engine::{mazefile, render, solver};
-use crate::runner::MatchRecord;
+use crate::runner::{MatchRecord, MatchState, MatchStatus};
 use crate::storage::leaderboard::Scope;
 use crate::storage::matches::{MatchFilter, MatchRow, Page};
 use crate::web::pages::{self as web, MatchLine, Pager, SortKey};
@@ -312,9 +312,9 @@ async fn tournament_page(
         let key = (row.bot_id, row.maze_id);
         let c = cells.entry(key).or_default();
         c.total += 1;
-        match row.status.as_str() {
-            "queued" | "running" => {}
-            "finished" => {
+        match row.status {
+            MatchState::Queued | MatchState::Running => {}
+            MatchState::Ended(MatchStatus::Finished) => {
                 c.played += 1;
                 c.finished += 1;
                 c.score_sum += row.score.unwrap_or(0.0);

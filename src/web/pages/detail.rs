@@ -115,7 +115,7 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
     let body = html! {
         h1 { (title) ": " (p.line.bot) " on " (p.line.maze) }
         div.cards {
-            div.card { "status" b { (status(&r.status)) } }
+            div.card { "status" b { (status(r.status.as_str())) } }
             div.card { "score" b { @if r.status == "finished" { (score(r.score)) } @else { "-" } } }
             div.card { "run 0 / run 1 steps" b { (opt(r.run0_steps)) " / " (opt(r.run1_steps)) } }
             div.card { "seed" b { (r.seed) } }

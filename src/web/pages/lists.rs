@@ -113,7 +113,7 @@ pub fn match_table(lines: &[MatchLine]) -> Markup {
                             td { a href={ "/bots/" (l.row.bot_id) } { (l.bot) } span.muted { " v" (l.row.version) } }
                             td { a href={ "/mazes/" (l.row.maze_id) } { (l.maze) } }
                             td.num { (l.row.seed) }
-                            td { (status(&l.row.status)) }
+                            td { (status(l.row.status.as_str())) }
                             td.num { @if l.row.status == "finished" { (score(l.row.score)) } @else { span.muted { "-" } } }
                             td.num { (opt(l.row.run0_steps)) }
                             td.num { (opt(l.row.run1_steps)) }
