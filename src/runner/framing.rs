@@ -80,6 +80,19 @@ pub async fn read_stderr<R: AsyncRead + AsFd + Unpin>(
     tail.into_text()
 }
 
+/// Whether `fd` holds bytes not yet read (or its end), right now.
+pub fn has_unread_bytes(fd: &impl AsFd) -> bool {
+    use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+    let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLIN)];
+    match poll(&mut fds, PollTimeout::ZERO) {
+        Ok(n) if n > 0 => fds[0]
+            .revents()
+            .is_some_and(|r| r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP)),
+        Ok(_) => false,
+        Err(_) => true,
+    }
+}
+
 /// Reads what `fd` holds right now, without waiting, passing each chunk to `each`.
 /// Returns whether the end of the stream was reached.
 fn read_ready(fd: &impl AsFd, buf: &mut [u8], mut each: impl FnMut(&[u8])) -> bool {

@@ -105,6 +105,8 @@ pub struct BotProcess {
     /// The scratch area as seen from here, through bubblewrap's init inside the
     /// sandbox (which lives as long as the match); found once.
     scratch: std::sync::OnceLock<PathBuf>,
+    /// `/proc/PID/stat` of the bot without the sandbox, kept open (read every step).
+    stat: std::sync::OnceLock<Option<proctree::OpenCounter>>,
 }
 
 /// Starts the bot with piped stdin, stdout and stderr.
@@ -204,6 +206,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
         memory_limit: launch.memory_limit_bytes,
         process_limit: launch.process_limit,
         scratch: std::sync::OnceLock::new(),
+        stat: std::sync::OnceLock::new(),
     })
 }
 
@@ -248,7 +251,15 @@ impl BotProcess {
             // The sandbox without a cgroup: the whole tree (PID namespace: nothing escapes).
             (None, Some(pid)) if self.sandboxed => Some(proctree::usage(pid).cpu_us),
             // No sandbox: the bot process and its waited-for children (one read a step).
-            (None, Some(pid)) => Some(proctree::process_cpu_us(pid)),
+            (None, Some(pid)) => Some(
+                self.stat
+                    .get_or_init(|| {
+                        proctree::OpenCounter::open(Path::new(&format!("/proc/{pid}/stat")))
+                    })
+                    .as_ref()
+                    .and_then(proctree::OpenCounter::process_cpu_us)
+                    .unwrap_or(0),
+            ),
             (None, None) => None,
         }
     }

@@ -68,6 +68,8 @@ pub struct Session {
     stderr: tokio::task::JoinHandle<String>,
     stderr_lines: tokio::sync::mpsc::UnboundedReceiver<String>,
     stderr_syncs: tokio::sync::mpsc::UnboundedSender<framing::StderrSync>,
+    /// The stderr pipe, to look whether it holds unread bytes before asking the reader.
+    stderr_pipe: Option<std::os::fd::OwnedFd>,
     started: Instant,
     limits: Limits,
     cpu_mark: Option<u64>,
@@ -108,6 +110,7 @@ impl Session {
             .stderr
             .take()
             .expect("stderr is piped by process::spawn");
+        let stderr_pipe = std::os::fd::AsFd::as_fd(&stderr).try_clone_to_owned().ok();
         let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let (lines, stderr_lines) = tokio::sync::mpsc::unbounded_channel();
@@ -125,6 +128,7 @@ impl Session {
             )),
             stderr_lines,
             stderr_syncs,
+            stderr_pipe,
             replies: framing::reply_reader(stdout),
             stdin,
             started,
@@ -144,8 +148,14 @@ impl Session {
     /// [`framing::STDERR_TRACE_BYTES`]): the stderr reader first takes in all that the
     /// pipe holds, so a line written before an answer is never handed on after it.
     pub async fn take_stderr_lines(&mut self) -> Vec<String> {
+        // Matches run on a single-threaded runtime: when the pipe holds nothing, every
+        // byte read so far has been handed on, and asking the reader is not needed.
+        let unread = self
+            .stderr_pipe
+            .as_ref()
+            .is_none_or(framing::has_unread_bytes);
         let (answer, done) = tokio::sync::oneshot::channel();
-        if self.stderr_syncs.send(answer).is_ok() {
+        if unread && self.stderr_syncs.send(answer).is_ok() {
             // The reader answers at once unless its task is starved; never wait long.
             let _ = tokio::time::timeout(STDERR_SYNC_WAIT, done).await;
         }

@@ -151,6 +151,7 @@ impl CgroupRoot {
             memory: PathBuf::new(),
             pids: PathBuf::new(),
             cpu_usage: PathBuf::new(),
+            cpu_counter: None,
         };
         match self {
             CgroupRoot::V1 {
@@ -203,6 +204,7 @@ impl CgroupRoot {
                 group.cpu_usage = dir.join("cpu.stat");
             }
         }
+        group.cpu_counter = super::proctree::OpenCounter::open(&group.cpu_usage);
         Ok(group)
     }
 }
@@ -240,6 +242,8 @@ pub struct MatchCgroup {
     memory: PathBuf,
     pids: PathBuf,
     cpu_usage: PathBuf,
+    /// `cpu_usage`, kept open: it is read at every step.
+    cpu_counter: Option<super::proctree::OpenCounter>,
 }
 
 impl MatchCgroup {
@@ -272,7 +276,10 @@ impl MatchCgroup {
 
     /// CPU time used by every process that ever ran in the cgroup, in microseconds.
     pub fn cpu_us(&self) -> Option<u64> {
-        let text = std::fs::read_to_string(&self.cpu_usage).ok()?;
+        let text = match &self.cpu_counter {
+            Some(counter) => counter.read()?,
+            None => std::fs::read_to_string(&self.cpu_usage).ok()?,
+        };
         match self.version {
             CgroupRoot::V1 { .. } => text.trim().parse::<u64>().ok().map(|ns| ns / 1000),
             CgroupRoot::V2 { .. } => counter(&text, "usage_usec"),
