@@ -38,9 +38,12 @@ fn available_kits() -> Vec<&'static str> {
 }
 
 fn build(dir: &Path, command: &[&str]) {
+    // Cargo builds into the kit's own target/ (where its manifests look), whatever
+    // target folder the tests themselves were built in.
     let status = Command::new(command[0])
         .args(&command[1..])
         .current_dir(dir)
+        .env("CARGO_TARGET_DIR", dir.join("target"))
         .status()
         .unwrap_or_else(|e| panic!("{command:?} in {}: {e}", dir.display()));
     assert!(status.success(), "{command:?} failed in {}", dir.display());
