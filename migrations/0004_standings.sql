@@ -26,16 +26,21 @@ create table standing (
     primary key (bot_version_id, tournament_id, hidden)
 );
 
-create trigger standing_on_insert after insert on match
-when new.status not in ('queued', 'running')
+-- A match's part of the sums, with the sign to apply it with (1: add, -1: take away).
+-- The triggers on `match` insert into this view; its own trigger does the arithmetic,
+-- in one place.
+create view standing_change (bot_version_id, tournament_id, maze_id, status, score, sign) as
+    select null, null, null, null, null, null where 0;
+
+create trigger standing_change_apply instead of insert on standing_change
 begin
     insert into standing (bot_version_id, tournament_id, hidden, played, finished,
                           score_sum, ratio_sum, ratio_count)
-    select new.bot_version_id, k.t, z.hidden, 1,
-           new.status = 'finished',
-           case when new.status = 'finished' then new.score else 1000.0 end,
-           coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
-           z.optimum is not null
+    select new.bot_version_id, k.t, z.hidden, new.sign,
+           new.sign * (new.status = 'finished'),
+           new.sign * (case when new.status = 'finished' then new.score else 1000.0 end),
+           new.sign * coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
+           new.sign * (z.optimum is not null)
     from maze z, (select coalesce(new.tournament_id, 0) as t union all select -1) k
     where z.maze_id = new.maze_id
     on conflict (bot_version_id, tournament_id, hidden) do update set
@@ -46,69 +51,36 @@ begin
         ratio_count = ratio_count + excluded.ratio_count;
 end;
 
+create trigger standing_on_insert after insert on match
+when new.status not in ('queued', 'running')
+begin
+    insert into standing_change
+    values (new.bot_version_id, new.tournament_id, new.maze_id, new.status, new.score, 1);
+end;
+
 create trigger standing_on_delete after delete on match
 when old.status not in ('queued', 'running')
 begin
-    update standing set
-        played = played - 1,
-        finished = finished - (old.status = 'finished'),
-        score_sum = score_sum - (case when old.status = 'finished' then old.score else 1000.0 end),
-        ratio_sum = ratio_sum - coalesce((case when old.status = 'finished' then old.score else 1000.0 end)
-                                         / (select optimum from maze where maze_id = old.maze_id), 0),
-        ratio_count = ratio_count - ((select optimum from maze where maze_id = old.maze_id) is not null)
-    where bot_version_id = old.bot_version_id
-      and tournament_id in (coalesce(old.tournament_id, 0), -1)
-      and hidden = (select hidden from maze where maze_id = old.maze_id);
+    insert into standing_change
+    values (old.bot_version_id, old.tournament_id, old.maze_id, old.status, old.score, -1);
 end;
 
 -- An update that changes what a match counts as: take the old away, add the new.
 create trigger standing_on_update_remove after update of status, score, bot_version_id, maze_id, tournament_id on match
 when old.status not in ('queued', 'running')
 begin
-    update standing set
-        played = played - 1,
-        finished = finished - (old.status = 'finished'),
-        score_sum = score_sum - (case when old.status = 'finished' then old.score else 1000.0 end),
-        ratio_sum = ratio_sum - coalesce((case when old.status = 'finished' then old.score else 1000.0 end)
-                                         / (select optimum from maze where maze_id = old.maze_id), 0),
-        ratio_count = ratio_count - ((select optimum from maze where maze_id = old.maze_id) is not null)
-    where bot_version_id = old.bot_version_id
-      and tournament_id in (coalesce(old.tournament_id, 0), -1)
-      and hidden = (select hidden from maze where maze_id = old.maze_id);
+    insert into standing_change
+    values (old.bot_version_id, old.tournament_id, old.maze_id, old.status, old.score, -1);
 end;
 
 create trigger standing_on_update_add after update of status, score, bot_version_id, maze_id, tournament_id on match
 when new.status not in ('queued', 'running')
 begin
-    insert into standing (bot_version_id, tournament_id, hidden, played, finished,
-                          score_sum, ratio_sum, ratio_count)
-    select new.bot_version_id, k.t, z.hidden, 1,
-           new.status = 'finished',
-           case when new.status = 'finished' then new.score else 1000.0 end,
-           coalesce((case when new.status = 'finished' then new.score else 1000.0 end) / z.optimum, 0),
-           z.optimum is not null
-    from maze z, (select coalesce(new.tournament_id, 0) as t union all select -1) k
-    where z.maze_id = new.maze_id
-    on conflict (bot_version_id, tournament_id, hidden) do update set
-        played = played + excluded.played,
-        finished = finished + excluded.finished,
-        score_sum = score_sum + excluded.score_sum,
-        ratio_sum = ratio_sum + excluded.ratio_sum,
-        ratio_count = ratio_count + excluded.ratio_count;
+    insert into standing_change
+    values (new.bot_version_id, new.tournament_id, new.maze_id, new.status, new.score, 1);
 end;
 
 -- The matches recorded before this version.
-insert into standing (bot_version_id, tournament_id, hidden, played, finished,
-                      score_sum, ratio_sum, ratio_count)
-select m.v, m.t, z.hidden, count(*),
-       sum(m.status = 'finished'),
-       sum(case when m.status = 'finished' then m.score else 1000.0 end),
-       coalesce(sum((case when m.status = 'finished' then m.score else 1000.0 end) / z.optimum), 0),
-       count(z.optimum)
-from (select bot_version_id as v, coalesce(tournament_id, 0) as t, status, score, maze_id
-      from match where status not in ('queued', 'running')
-      union all
-      select bot_version_id, -1, status, score, maze_id
-      from match where status not in ('queued', 'running')) m
-join maze z on z.maze_id = m.maze_id
-group by m.v, m.t, z.hidden;
+insert into standing_change
+select bot_version_id, tournament_id, maze_id, status, score, 1
+from match where status not in ('queued', 'running');

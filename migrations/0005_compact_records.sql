@@ -15,3 +15,6 @@ create table match_record (
     -- zstd-compressed
     data blob not null
 );
+
+-- The rows still to convert, found without reading the table (empty once converted).
+create index match_inline_trace on match (match_id) where trace is not null;

@@ -229,7 +229,7 @@ impl Worker {
         loop {
             tokio::select! {
                 record = &mut game => {
-                    match self.storage.complete_match(job.match_id, &self.owner, &record).await {
+                    match self.storage.complete_match(job.match_id, &self.owner, &record, &maze).await {
                         Ok(true) => {
                             if let Some(m) = &self.metrics {
                                 m.observe_match(started.elapsed());

@@ -58,12 +58,8 @@ async fn show(args: ShowArgs) -> anyhow::Result<()> {
         .get_match(args.id)
         .await?
         .with_context(|| format!("no match {} in {}", args.id, args.database))?;
-    let bot = storage.get_bot(row.bot_id).await?;
     let maze_row = storage.get_maze(row.maze_id).await?;
-    let bot_name = bot.map_or_else(|| format!("bot {}", row.bot_id), |b| b.name);
-    let maze_name = maze_row
-        .as_ref()
-        .map_or_else(|| format!("maze {}", row.maze_id), |m| m.name.clone());
+    let (bot_name, maze_name) = (row.bot_name.clone(), row.maze_name.clone());
     println!(
         "match {}: {bot_name} v{} on {maze_name}, seed {}{}",
         row.match_id,

@@ -7,7 +7,7 @@
 use nix::sched::{CpuSet, sched_getaffinity, sched_getcpu, sched_setaffinity};
 use nix::unistd::Pid;
 
-/// The cores this process may run on, in order.
+/// The cores the calling thread may run on, in order.
 pub fn allowed_cores() -> Vec<usize> {
     let Ok(set) = sched_getaffinity(Pid::from_raw(0)) else {
         return Vec::new();
@@ -37,10 +37,8 @@ pub fn pin_to_this_core() -> Option<usize> {
 
 /// The core the calling thread is pinned to, if it may run on exactly one.
 pub fn pinned_core() -> Option<usize> {
-    let set = sched_getaffinity(Pid::from_raw(0)).ok()?;
-    let mut cores = (0..CpuSet::count()).filter(|&c| set.is_set(c).unwrap_or(false));
-    match (cores.next(), cores.next()) {
-        (Some(core), None) => Some(core),
+    match allowed_cores()[..] {
+        [core] => Some(core),
         _ => None,
     }
 }

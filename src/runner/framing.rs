@@ -82,37 +82,33 @@ pub async fn read_stderr<R: AsyncRead + AsFd + Unpin>(
 
 /// Whether `fd` holds bytes not yet read (or its end), right now.
 pub fn has_unread_bytes(fd: &impl AsFd) -> bool {
+    poll_readable(fd).unwrap_or(true)
+}
+
+/// Whether a read of `fd` would not wait now (bytes or the end); `None` if poll fails.
+fn poll_readable(fd: &impl AsFd) -> Option<bool> {
     use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
     let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLIN)];
-    match poll(&mut fds, PollTimeout::ZERO) {
-        Ok(n) if n > 0 => fds[0]
-            .revents()
-            .is_some_and(|r| r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP)),
-        Ok(_) => false,
-        Err(_) => true,
-    }
+    let n = poll(&mut fds, PollTimeout::ZERO).ok()?;
+    Some(
+        n > 0
+            && fds[0]
+                .revents()
+                .is_some_and(|r| r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP)),
+    )
 }
 
 /// Reads what `fd` holds right now, without waiting, passing each chunk to `each`.
 /// Returns whether the end of the stream was reached.
 fn read_ready(fd: &impl AsFd, buf: &mut [u8], mut each: impl FnMut(&[u8])) -> bool {
-    use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
-    loop {
-        let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLIN)];
-        match poll(&mut fds, PollTimeout::ZERO) {
-            Ok(n) if n > 0 => {}
-            _ => return false,
-        }
-        let ready = fds[0].revents().unwrap_or(PollFlags::empty());
-        if !ready.intersects(PollFlags::POLLIN | PollFlags::POLLHUP) {
-            return false;
-        }
+    while poll_readable(fd) == Some(true) {
         match nix::unistd::read(fd.as_fd(), buf) {
             Ok(0) => return true,
             Ok(n) => each(&buf[..n]),
             Err(_) => return false,
         }
     }
+    false
 }
 
 /// Cuts a byte stream into lines for [`StderrLines`].

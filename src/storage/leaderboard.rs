@@ -135,7 +135,7 @@ impl Storage {
 mod tests {
     use super::*;
     use crate::runner::{MatchRecord, MatchStatus};
-    use crate::storage::test_support::{bot_and_maze, fresh};
+    use crate::storage::test_support::{bot_and_maze, fresh, maze};
 
     fn record(status: MatchStatus, score: Option<f64>) -> MatchRecord {
         serde_json::from_value(serde_json::json!({
@@ -172,9 +172,14 @@ mod tests {
         // Finished (score 1.1), crashed by the worker, and one left queued.
         let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
         assert!(
-            db.complete_match(a.match_id, "w", &record(MatchStatus::Finished, Some(1.1)))
-                .await
-                .unwrap()
+            db.complete_match(
+                a.match_id,
+                "w",
+                &record(MatchStatus::Finished, Some(1.1)),
+                &maze()
+            )
+            .await
+            .unwrap()
         );
         let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
         assert!(db.fail_match(b.match_id, "w", "ours").await.unwrap());
@@ -187,9 +192,14 @@ mod tests {
         let single = db.queue_match(v, z, 5).await.unwrap();
         let c = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
         assert_eq!(c.match_id, single);
-        db.complete_match(c.match_id, "w", &record(MatchStatus::Timeout, None))
-            .await
-            .unwrap();
+        db.complete_match(
+            c.match_id,
+            "w",
+            &record(MatchStatus::Timeout, None),
+            &maze(),
+        )
+        .await
+        .unwrap();
         assert_eq!(same_as_recount(&db, Scope::All).await[0].played, 3);
         assert_eq!(
             same_as_recount(&db, Scope::Tournament(t.tournament_id)).await[0].played,

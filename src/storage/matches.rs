@@ -6,7 +6,7 @@
 use sqlx::FromRow;
 
 use super::{Result, Storage, StorageError, now_ms, records};
-use crate::engine::mazefile;
+use crate::engine::{Maze, mazefile};
 use crate::runner::MatchRecord;
 use crate::runner::outcome::{MatchState, MatchStatus, MatchSummary};
 
@@ -93,6 +93,43 @@ pub struct ClaimedMatch {
     pub tournament_id: Option<i64>,
     /// Environment variables declared for the bot version (JSON object).
     pub env: String,
+}
+
+/// A record ready to be written: the row's summary (JSON) and the compact record.
+struct StoredRecord {
+    match_id: i64,
+    summary: String,
+    encoding: i64,
+    data: Vec<u8>,
+}
+
+impl StoredRecord {
+    /// Encodes `record` of match `match_id`, played on `maze`.
+    fn encode(match_id: i64, record: &MatchRecord, maze: &Maze) -> Result<StoredRecord> {
+        let fail = |message: String| StorageError::Record { match_id, message };
+        let (encoding, data) = records::encode(record, maze).map_err(fail)?;
+        let summary = serde_json::to_string(&records::summary(record))
+            .map_err(|e| fail(format!("cannot encode the record's summary: {e}")))?;
+        Ok(StoredRecord {
+            match_id,
+            summary,
+            encoding,
+            data,
+        })
+    }
+
+    /// Writes the compact record (the caller writes the summary with its row).
+    async fn put(&self, tx: &mut sqlx::SqliteConnection) -> Result<()> {
+        sqlx::query(
+            "insert or replace into match_record (match_id, encoding, data) values (?, ?, ?)",
+        )
+        .bind(self.match_id)
+        .bind(self.encoding)
+        .bind(&self.data)
+        .execute(tx)
+        .await?;
+        Ok(())
+    }
 }
 
 /// What [`Storage::get_record`] reads.
@@ -229,6 +266,8 @@ impl Storage {
     /// [`super::records`]). Returns false (and writes nothing) when the lease was lost
     /// meanwhile.
     ///
+    /// `maze` is the maze it was played on.
+    ///
     /// # Errors
     /// Database failures, or a record that cannot be encoded.
     pub async fn complete_match(
@@ -236,19 +275,9 @@ impl Storage {
         match_id: i64,
         owner: &str,
         record: &MatchRecord,
+        maze: &Maze,
     ) -> Result<bool> {
-        let fail = |message: String| StorageError::Record { match_id, message };
-        let layout: Option<String> = sqlx::query_scalar(
-            "select z.layout from match m join maze z on z.maze_id = m.maze_id where m.match_id = ?",
-        )
-        .bind(match_id)
-        .fetch_optional(self.pool())
-        .await?;
-        let maze = mazefile::numeric::parse(layout.unwrap_or_default().as_bytes())
-            .map_err(|e| fail(format!("its stored maze is invalid: {e}")))?;
-        let (encoding, data) = records::encode(record, &maze).map_err(fail)?;
-        let summary = serde_json::to_string(&records::summary(record))
-            .map_err(|e| fail(format!("cannot encode the record's summary: {e}")))?;
+        let stored = StoredRecord::encode(match_id, record, maze)?;
         let mut tx = self.pool().begin().await?;
         let done = sqlx::query(
             "update match set status = ?, score = ?, run0_steps = ?, run1_steps = ?, total_steps = ?,
@@ -260,21 +289,14 @@ impl Storage {
         .bind(record.run0_steps.map(i64::from))
         .bind(record.run1_steps.map(i64::from))
         .bind(i64::from(record.total_steps))
-        .bind(summary)
+        .bind(&stored.summary)
         .bind(now_ms())
         .bind(match_id)
         .bind(owner)
         .execute(&mut *tx)
         .await?;
         if done.rows_affected() == 1 {
-            sqlx::query(
-                "insert or replace into match_record (match_id, encoding, data) values (?, ?, ?)",
-            )
-            .bind(match_id)
-            .bind(encoding)
-            .bind(data)
-            .execute(&mut *tx)
-            .await?;
+            stored.put(&mut tx).await?;
         }
         tx.commit().await?;
         Ok(done.rows_affected() == 1)
@@ -362,20 +384,12 @@ impl Storage {
                     );
                     continue;
                 };
-                let Ok((encoding, data)) = records::encode(&whole, &maze) else {
+                let Ok(stored) = StoredRecord::encode(match_id, &whole, &maze) else {
                     continue;
                 };
-                let summary = serde_json::to_string(&records::summary(&whole)).unwrap_or_default();
-                sqlx::query(
-                    "insert or replace into match_record (match_id, encoding, data) values (?, ?, ?)",
-                )
-                .bind(match_id)
-                .bind(encoding)
-                .bind(data)
-                .execute(&mut *tx)
-                .await?;
+                stored.put(&mut tx).await?;
                 sqlx::query("update match set record = ?, trace = null where match_id = ?")
-                    .bind(summary)
+                    .bind(&stored.summary)
                     .bind(match_id)
                     .execute(&mut *tx)
                     .await?;
@@ -527,7 +541,7 @@ pub(super) fn failure_record(status: MatchStatus, reason: &str) -> Result<String
 mod tests {
     use super::*;
     use crate::storage::leaderboard::Scope;
-    use crate::storage::test_support::{bot_and_maze, fresh};
+    use crate::storage::test_support::{bot_and_maze, fresh, maze};
 
     fn record(status: crate::runner::MatchStatus) -> MatchRecord {
         serde_json::from_value(serde_json::json!({
@@ -568,17 +582,17 @@ mod tests {
         db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
         let finished = crate::runner::MatchStatus::Finished;
         assert!(
-            !db.complete_match(id, "w2", &record(finished))
+            !db.complete_match(id, "w2", &record(finished), &maze())
                 .await
                 .unwrap()
         );
         assert!(
-            db.complete_match(id, "w1", &record(finished))
+            db.complete_match(id, "w1", &record(finished), &maze())
                 .await
                 .unwrap()
         );
         assert!(
-            !db.complete_match(id, "w1", &record(finished))
+            !db.complete_match(id, "w1", &record(finished), &maze())
                 .await
                 .unwrap()
         );
@@ -602,7 +616,7 @@ mod tests {
         // The dead worker can no longer write.
         let status = crate::runner::MatchStatus::Crashed;
         assert!(
-            !db.complete_match(id, "dead", &record(status))
+            !db.complete_match(id, "dead", &record(status), &maze())
                 .await
                 .unwrap()
         );
@@ -622,6 +636,7 @@ mod tests {
             a.match_id,
             "w",
             &record(crate::runner::MatchStatus::Finished),
+            &maze(),
         )
         .await
         .unwrap();
@@ -630,6 +645,7 @@ mod tests {
             b.match_id,
             "w",
             &record(crate::runner::MatchStatus::Timeout),
+            &maze(),
         )
         .await
         .unwrap();

@@ -142,6 +142,14 @@ pub(crate) mod test_support {
         (Storage::open(&url).await.unwrap(), dir)
     }
 
+    /// The layout of the maze of [`bot_and_maze`].
+    const MAZE: &str = "2\n3,6\n9,12\n";
+
+    /// The maze of [`bot_and_maze`], parsed.
+    pub fn maze() -> crate::engine::Maze {
+        crate::engine::mazefile::numeric::parse(MAZE.as_bytes()).unwrap()
+    }
+
     /// A bot "b" (owner token hash "h") with one version, and a public 2x2 maze "m":
     /// the version's and the maze's ids.
     pub async fn bot_and_maze(db: &Storage) -> (i64, i64) {
@@ -165,7 +173,7 @@ pub(crate) mod test_support {
                 name: "m",
                 hash: "hash",
                 dim: 2,
-                layout: "2\n3,6\n9,12\n",
+                layout: MAZE,
                 hidden: false,
                 optimum: Some(1),
             })

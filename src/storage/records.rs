@@ -98,10 +98,10 @@ pub fn summary(record: &MatchRecord) -> MatchRecord {
 pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), String> {
     let mut steps = Answers::default();
     for (i, s) in record.trace.iter().enumerate() {
-        let action = s.report.action;
-        steps.actions.push(action_code(action).unwrap_or(255));
-        if action_code(action).is_none() {
-            steps.other_actions.insert(i, action);
+        let code = action_code(s.report.action);
+        steps.actions.push(code.unwrap_or(255));
+        if code.is_none() {
+            steps.other_actions.insert(i, s.report.action);
         }
         steps.answer_us.push(s.answer_us);
         steps.cpu_us.push(s.cpu_us);

@@ -50,40 +50,22 @@ async fn mazes_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
     Ok(Html(web::mazes(&state.storage.list_mazes().await?)))
 }
 
-/// Names of bots and mazes, to label match lines.
-struct Names {
-    bots: BTreeMap<i64, String>,
-    mazes: BTreeMap<i64, String>,
+/// A match as a line of a page.
+fn line(row: MatchRow) -> MatchLine {
+    MatchLine {
+        reason: public_reason(&row),
+        row,
+    }
 }
 
-impl Names {
-    async fn load(state: &AppState) -> ApiResult<Names> {
-        Ok(Names {
-            bots: state
-                .storage
-                .list_bots()
-                .await?
-                .into_iter()
-                .map(|b| (b.bot_id, b.name))
-                .collect(),
-            mazes: state
-                .storage
-                .list_mazes()
-                .await?
-                .into_iter()
-                .map(|m| (m.maze_id, m.name))
-                .collect(),
-        })
-    }
-
-    fn line(&self, row: MatchRow) -> MatchLine {
-        MatchLine {
-            bot: self.bots.get(&row.bot_id).cloned().unwrap_or_default(),
-            maze: self.mazes.get(&row.maze_id).cloned().unwrap_or_default(),
-            reason: public_reason(&row),
-            row,
-        }
-    }
+/// The latest [`RECENT`] matches that pass `filter`, as lines, and how many pass it.
+async fn recent_matches(state: &AppState, filter: MatchFilter) -> ApiResult<(Vec<MatchLine>, i64)> {
+    let page = Page {
+        offset: 0,
+        limit: RECENT,
+    };
+    let (rows, total) = state.storage.list_matches(&filter, page).await?;
+    Ok((rows.into_iter().map(line).collect(), total))
 }
 
 /// A failure's reason as anyone may see it: on a hidden maze only its step (the text
@@ -115,25 +97,19 @@ async fn bot_page(
         .ok_or_else(|| ApiError::NotFound(format!("no bot {id}")))?;
     let mut versions = state.storage.bot_versions(id).await?;
     versions.reverse();
-    let (rows, total) = state
-        .storage
-        .list_matches(
-            &MatchFilter {
-                bot_id: Some(id),
-                ..MatchFilter::default()
-            },
-            Page {
-                offset: 0,
-                limit: RECENT,
-            },
-        )
-        .await?;
-    let names = Names::load(&state).await?;
+    let (recent, total_matches) = recent_matches(
+        &state,
+        MatchFilter {
+            bot_id: Some(id),
+            ..MatchFilter::default()
+        },
+    )
+    .await?;
     Ok(Html(web::bot(&web::BotPage {
         bot,
         versions,
-        recent: rows.into_iter().map(|r| names.line(r)).collect(),
-        total_matches: total,
+        recent,
+        total_matches,
     })))
 }
 
@@ -150,21 +126,14 @@ async fn maze_page(
             render::svg(&maze, path.as_deref())
         })
     };
-    let (rows, _) = state
-        .storage
-        .list_matches(
-            &MatchFilter {
-                maze_id: Some(id),
-                ..MatchFilter::default()
-            },
-            Page {
-                offset: 0,
-                limit: RECENT,
-            },
-        )
-        .await?;
-    let names = Names::load(&state).await?;
-    let lines: Vec<MatchLine> = rows.into_iter().map(|r| names.line(r)).collect();
+    let (lines, _) = recent_matches(
+        &state,
+        MatchFilter {
+            maze_id: Some(id),
+            ..MatchFilter::default()
+        },
+    )
+    .await?;
     Ok(Html(web::maze(&m, svg.as_deref(), &lines)))
 }
 
@@ -174,14 +143,11 @@ async fn matches_page(
 ) -> ApiResult<Html<String>> {
     let (filter, page) = q.parse()?;
     let (rows, total) = state.storage.list_matches(&filter, page).await?;
-    let names = Names::load(&state).await?;
     let mut parts = Vec::new();
     let mut query = Vec::new();
     if let Some(b) = filter.bot_id {
-        parts.push(format!(
-            "bot {}",
-            names.bots.get(&b).cloned().unwrap_or(b.to_string())
-        ));
+        let name = state.storage.get_bot(b).await?.map(|bot| bot.name);
+        parts.push(format!("bot {}", name.unwrap_or(b.to_string())));
         query.push(format!("bot_id={b}"));
     }
     if let Some(t) = filter.tournament_id {
@@ -189,17 +155,15 @@ async fn matches_page(
         query.push(format!("tournament_id={t}"));
     }
     if let Some(m) = filter.maze_id {
-        parts.push(format!(
-            "maze {}",
-            names.mazes.get(&m).cloned().unwrap_or(m.to_string())
-        ));
+        let name = state.storage.get_maze(m).await?.map(|maze| maze.name);
+        parts.push(format!("maze {}", name.unwrap_or(m.to_string())));
         query.push(format!("maze_id={m}"));
     }
     if let Some(s) = &filter.status {
         parts.push(format!("status {s}"));
         query.push(format!("status={s}"));
     }
-    let lines: Vec<MatchLine> = rows.into_iter().map(|r| names.line(r)).collect();
+    let lines: Vec<MatchLine> = rows.into_iter().map(line).collect();
     let pager = Pager {
         base: if query.is_empty() {
             "/matches".into()
@@ -227,7 +191,6 @@ async fn match_page(
         .get_match(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))?;
-    let names = Names::load(&state).await?;
     let hidden = row.maze_hidden;
     let mut record: Option<MatchRecord> = None;
     let mut maze = None;
@@ -244,10 +207,10 @@ async fn match_page(
         r.maze_layout = Some(m.layout);
         record = Some(r);
     }
-    let line = names.line(row);
+    let line = line(row);
     let title = format!(
         "match {id}: {} on {} (seed {})",
-        line.bot, line.maze, line.row.seed
+        line.row.bot_name, line.row.maze_name, line.row.seed
     );
     let viewer = record
         .as_ref()
@@ -291,23 +254,16 @@ async fn tournament_page(
         state.storage.leaderboard(Scope::Tournament(id)).await?,
         &Caller::Anonymous,
     );
-    let names = Names::load(&state).await?;
     let mut bots: Vec<(i64, String)> = Vec::new();
     let mut mazes: Vec<(i64, String)> = Vec::new();
     let mut cells: BTreeMap<(i64, i64), web::Cell> = BTreeMap::new();
     let mut failed = std::collections::BTreeSet::new();
     for row in state.storage.tournament_matches(id).await? {
         if !bots.iter().any(|(b, _)| *b == row.bot_id) {
-            bots.push((
-                row.bot_id,
-                names.bots.get(&row.bot_id).cloned().unwrap_or_default(),
-            ));
+            bots.push((row.bot_id, row.bot_name.clone()));
         }
         if !mazes.iter().any(|(m, _)| *m == row.maze_id) {
-            mazes.push((
-                row.maze_id,
-                names.mazes.get(&row.maze_id).cloned().unwrap_or_default(),
-            ));
+            mazes.push((row.maze_id, row.maze_name.clone()));
         }
         let key = (row.bot_id, row.maze_id);
         let c = cells.entry(key).or_default();

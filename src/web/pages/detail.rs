@@ -113,7 +113,7 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
     let r = &p.line.row;
     let title = format!("Match {}", r.match_id);
     let body = html! {
-        h1 { (title) ": " (p.line.bot) " on " (p.line.maze) }
+        h1 { (title) ": " (p.line.row.bot_name) " on " (p.line.row.maze_name) }
         div.cards {
             div.card { "status" b { (status(r.status.as_str())) } }
             div.card { "score" b { @if r.status == "finished" { (score(r.score)) } @else { "-" } } }
@@ -125,8 +125,8 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
         }
         @if let Some(reason) = &p.line.reason { p { strong { "Reason: " } (reason) } }
         p {
-            a href={ "/bots/" (r.bot_id) } { "bot " (p.line.bot) } " · "
-            a href={ "/mazes/" (r.maze_id) } { "maze " (p.line.maze) } " · "
+            a href={ "/bots/" (r.bot_id) } { "bot " (p.line.row.bot_name) } " · "
+            a href={ "/mazes/" (r.maze_id) } { "maze " (p.line.row.maze_name) } " · "
             a href={ "/api/matches/" (r.match_id) } { "JSON" }
         }
         @match &p.viewer {

@@ -87,12 +87,8 @@ impl Pager {
 /// A match in a list, with the names to show and what may be said of its failure.
 #[derive(Debug, Clone)]
 pub struct MatchLine {
-    /// The stored match.
+    /// The stored match (with its bot's and maze's names).
     pub row: MatchRow,
-    /// Its bot's name.
-    pub bot: String,
-    /// Its maze's name.
-    pub maze: String,
     /// The failure's reason as the visitor may see it (hidden mazes: the step only).
     pub reason: Option<String>,
 }
@@ -110,8 +106,8 @@ pub fn match_table(lines: &[MatchLine]) -> Markup {
                     @for l in lines {
                         tr {
                             td.num { a href={ "/matches/" (l.row.match_id) } { (l.row.match_id) } }
-                            td { a href={ "/bots/" (l.row.bot_id) } { (l.bot) } span.muted { " v" (l.row.version) } }
-                            td { a href={ "/mazes/" (l.row.maze_id) } { (l.maze) } }
+                            td { a href={ "/bots/" (l.row.bot_id) } { (l.row.bot_name) } span.muted { " v" (l.row.version) } }
+                            td { a href={ "/mazes/" (l.row.maze_id) } { (l.row.maze_name) } }
                             td.num { (l.row.seed) }
                             td { (status(l.row.status.as_str())) }
                             td.num { @if l.row.status == "finished" { (score(l.row.score)) } @else { span.muted { "-" } } }
