@@ -249,8 +249,8 @@ pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
         maze_hidden: row.maze_hidden,
         warnings: json(reveal.then(|| serde_json::to_value(&summary.warnings))),
         limits: json(summary.limits.as_ref().map(serde_json::to_value)),
-        maze_hash: summary.maze_hash.filter(|_| reveal),
-        maze_dim: summary.maze_dim.filter(|_| reveal).map(i64::from),
+        maze_hash: reveal.then_some(row.maze_hash),
+        maze_dim: reveal.then_some(row.maze_dim),
         engine_version: summary.engine_version,
         timings: json(
             summary

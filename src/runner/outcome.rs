@@ -312,20 +312,14 @@ impl MatchRecord {
     }
 }
 
-/// What a match row keeps of its record: the record without its trace, stderr tail and
-/// notices, for lists and pages. Every field is optional: a match the server ended
+/// What a match row keeps of its record for lists and pages, besides its columns (seed,
+/// score, step counts) and its maze's (hash, side). Every field is optional: a match the server ended
 /// without playing it (aborted, or its build failed) has only a status and an error.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct MatchSummary {
     /// The version of the referee that played it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub engine_version: Option<String>,
-    /// SHA-256 of the maze's canonical text.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub maze_hash: Option<String>,
-    /// The maze's dimension.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub maze_dim: Option<u32>,
     /// The limits it was played under.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limits: Option<LimitsRecord>,

@@ -34,6 +34,10 @@ pub struct MatchRow {
     pub maze_name: String,
     /// Whether the maze is hidden.
     pub maze_hidden: bool,
+    /// SHA-256 of the maze's canonical text.
+    pub maze_hash: String,
+    /// The maze's side.
+    pub maze_dim: i64,
     /// The seed sent to the bot.
     pub seed: i64,
     /// The tournament, if any.
@@ -164,7 +168,7 @@ pub struct Page {
 }
 
 const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
-        z.name as maze_name, z.hidden as maze_hidden, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
+        z.name as maze_name, z.hidden as maze_hidden, z.hash as maze_hash, z.dim as maze_dim, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
         m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at
      from match m join bot_version v on v.bot_version_id = m.bot_version_id
      join bot b on b.bot_id = v.bot_id
@@ -328,17 +332,15 @@ impl Storage {
             return Ok(None);
         };
         let fail = |message: String| StorageError::Record { match_id, message };
-        let summary: Option<MatchRecord> = summary.and_then(|s| serde_json::from_str(&s).ok());
         match (encoding, data) {
             (Some(encoding), Some(data)) => {
-                let summary = summary.ok_or_else(|| fail("its summary cannot be read".into()))?;
                 let maze = mazefile::numeric::parse(layout.as_bytes())
                     .map_err(|e| fail(format!("its stored maze is invalid: {e}")))?;
-                records::decode(encoding, &data, summary, &maze)
+                records::decode(encoding, &data, summary.as_deref().unwrap_or(""), &maze)
                     .map(Some)
                     .map_err(fail)
             }
-            _ => Ok(summary),
+            _ => Ok(summary.and_then(|s| serde_json::from_str(&s).ok())),
         }
     }
 

@@ -1,28 +1,32 @@
 //! How a match's record is stored: compactly, apart from the match row.
 //!
-//! The match row keeps a small summary (what lists, pages and standings need: status,
-//! score, error, warnings, limits, timings). The whole record, with its stderr tail,
-//! notices and per-step trace, is one zstd-compressed value in `match_record`. Its
-//! usual encoding ([`ENCODING_ANSWERS`]) keeps of each step only what the referee cannot
-//! work out again: the bot's answer, its timings, its stderr lines and debug object.
-//! Everything else (sensors, events, positions, headings, warnings) is replayed by the
-//! referee on the maze when the record is read: the rules are a pure function of the
-//! answers. An encoding is only used when replaying it gives back the very same trace
-//! (checked when it is written); otherwise the whole record is kept as JSON
-//! ([`ENCODING_JSON`]).
+//! The match row keeps the score and step counts as columns and a small summary (what
+//! lists and pages need besides: status, error, warnings, limits, timings, the referee's
+//! version; see [`summary`]). The rest of the record, with its stderr tail, notices and
+//! per-step trace, is one zstd-compressed value in `match_record`. Its usual encoding
+//! ([`ENCODING_ANSWERS`]) keeps of each step only what the referee cannot work out
+//! again: the bot's answer, its timings, its stderr lines and debug object. Everything
+//! else (sensors, events, positions, headings, warnings) is replayed by the referee on
+//! the maze when the record is read: the rules are a pure function of the answers. An
+//! encoding is only used when reading it back gives the very same record (checked when
+//! it is written); otherwise the whole record is kept as JSON ([`ENCODING_JSON`]).
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
 use crate::engine::{Action, Game, GameConfig, Maze};
+use crate::runner::outcome::{MatchSummary, Notice};
 use crate::runner::{MatchRecord, TraceStep};
 
 /// The whole record as JSON, compressed.
 pub const ENCODING_JSON: i64 = 1;
-/// The record without its trace, and per step only the answers and what the bot
-/// showed, compressed; the rest of each step is replayed on the maze.
-pub const ENCODING_ANSWERS: i64 = 2;
+/// As [`ENCODING_ANSWERS`], but with the rest of the record (all but its trace, stderr
+/// tail and notices) in the row. Written by development builds before 0.2.0; still read.
+pub const ENCODING_ANSWERS_WHOLE_ROW: i64 = 2;
+/// What the row's [`summary`] leaves out, and per step only the answers and what the
+/// bot showed, compressed; the rest of each step is replayed on the maze.
+pub const ENCODING_ANSWERS: i64 = 3;
 
 /// The zstd level: about 3 KB for a match of a few hundred steps, a few ms to write.
 const LEVEL: i32 = 9;
@@ -35,17 +39,40 @@ struct Answers {
     /// The answers outside the rules (played leniently), by index in the trace.
     other_actions: BTreeMap<usize, Action>,
     answer_us: Vec<u64>,
+    /// Each step's CPU time (written by [`ENCODING_ANSWERS_WHOLE_ROW`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     cpu_us: Vec<Option<u64>>,
+    /// Each step's answer time less its CPU time: the bot's CPU time is most of its
+    /// answer time, so these are small numbers, which compress better.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    cpu_lag_us: Vec<Option<i64>>,
     /// By index in the trace, the steps that have any.
     stderr: BTreeMap<usize, Vec<String>>,
     debug: BTreeMap<usize, serde_json::Value>,
 }
 
-/// What the compact encoding stores besides the row's summary.
+/// What the compact encoding stores besides the row's summary and columns. (The
+/// fields before `stderr_tail` are absent from [`ENCODING_ANSWERS_WHOLE_ROW`].)
 #[derive(Debug, Serialize, Deserialize)]
 struct Stored {
+    #[serde(default)]
+    protocol: u32,
+    #[serde(default)]
+    seed: u64,
+    #[serde(default)]
+    score: Option<f64>,
+    #[serde(default)]
+    run0_steps: Option<u32>,
+    #[serde(default)]
+    run1_steps: Option<u32>,
+    #[serde(default)]
+    total_steps: u32,
+    #[serde(default)]
+    bot_pid: Option<u32>,
+    #[serde(default)]
+    core: Option<usize>,
     stderr_tail: String,
-    notices: Vec<crate::runner::outcome::Notice>,
+    notices: Vec<Notice>,
     steps: Answers,
 }
 
@@ -78,15 +105,16 @@ fn code_action(code: u8) -> Option<Action> {
     }
 }
 
-/// The summary the match row keeps: the record without its trace, stderr tail,
-/// notices and maze layout.
-pub fn summary(record: &MatchRecord) -> MatchRecord {
-    MatchRecord {
-        trace: Vec::new(),
-        stderr_tail: String::new(),
-        notices: Vec::new(),
-        maze_layout: None,
-        ..record.clone()
+/// The summary the match row keeps: what lists and pages show of a match besides the
+/// row's columns (score and step counts) and its maze (hash and side).
+pub fn summary(record: &MatchRecord) -> MatchSummary {
+    MatchSummary {
+        engine_version: Some(record.engine_version.clone()),
+        limits: Some(record.limits.clone()),
+        status: Some(record.status),
+        warnings: record.warnings.clone(),
+        error: record.error.clone(),
+        timings: Some(record.timings),
     }
 }
 
@@ -104,7 +132,9 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
             steps.other_actions.insert(i, s.report.action);
         }
         steps.answer_us.push(s.answer_us);
-        steps.cpu_us.push(s.cpu_us);
+        steps
+            .cpu_lag_us
+            .push(s.cpu_us.map(|cpu| s.answer_us as i64 - cpu as i64));
         if !s.stderr.is_empty() {
             steps.stderr.insert(i, s.stderr.clone());
         }
@@ -113,59 +143,116 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
         }
     }
     let stored = Stored {
+        protocol: record.protocol,
+        seed: record.seed,
+        score: record.score,
+        run0_steps: record.run0_steps,
+        run1_steps: record.run1_steps,
+        total_steps: record.total_steps,
+        bot_pid: record.bot_pid,
+        core: record.core,
         stderr_tail: record.stderr_tail.clone(),
         notices: record.notices.clone(),
         steps,
     };
-    let replays = replay(&stored.steps, maze, record.limits.max_steps)
-        .is_ok_and(|trace| trace == record.trace);
-    let (encoding, json) = if replays {
-        (ENCODING_ANSWERS, serde_json::to_vec(&stored))
-    } else {
-        let mut whole = record.clone();
-        whole.maze_layout = None;
-        (ENCODING_JSON, serde_json::to_vec(&whole))
+    let encode_err = |e: serde_json::Error| format!("cannot encode the match record: {e}");
+    let compact = serde_json::to_vec(&stored).map_err(encode_err)?;
+    let whole = MatchRecord {
+        maze_layout: None,
+        ..record.clone()
     };
-    let json = json.map_err(|e| format!("cannot encode the match record: {e}"))?;
+    let reads_back = complete(stored, summary(record), maze).is_ok_and(|back| back == whole);
+    let (encoding, json) = if reads_back {
+        (ENCODING_ANSWERS, compact)
+    } else {
+        (
+            ENCODING_JSON,
+            serde_json::to_vec(&whole).map_err(encode_err)?,
+        )
+    };
     let data = zstd::bulk::compress(&json, LEVEL)
         .map_err(|e| format!("cannot compress the match record: {e}"))?;
     Ok((encoding, data))
 }
 
-/// Decodes a stored record of a match on `maze`, whose row keeps `summary`.
+/// Decodes a stored record of a match on `maze`, whose row keeps `row_summary` (JSON).
 ///
 /// # Errors
-/// The bytes are not a record in that encoding, or do not replay on the maze.
+/// The bytes are not a record in that encoding, the row's summary is not one, or the
+/// answers do not replay on the maze.
 pub fn decode(
     encoding: i64,
     data: &[u8],
-    summary: MatchRecord,
+    row_summary: &str,
     maze: &Maze,
 ) -> Result<MatchRecord, String> {
     let json = zstd::stream::decode_all(data)
         .map_err(|e| format!("the stored match record cannot be decompressed: {e}"))?;
+    let invalid = |e: serde_json::Error| format!("the stored match record is not valid: {e}");
+    let invalid_row = |e: serde_json::Error| format!("the match's summary is not valid: {e}");
     match encoding {
-        ENCODING_JSON => serde_json::from_slice(&json)
-            .map_err(|e| format!("the stored match record is not valid: {e}")),
+        ENCODING_JSON => serde_json::from_slice(&json).map_err(invalid),
         ENCODING_ANSWERS => {
-            let stored: Stored = serde_json::from_slice(&json)
-                .map_err(|e| format!("the stored match record is not valid: {e}"))?;
-            let trace = replay(&stored.steps, maze, summary.limits.max_steps)?;
+            let stored: Stored = serde_json::from_slice(&json).map_err(invalid)?;
+            let summary = serde_json::from_str(row_summary).map_err(invalid_row)?;
+            complete(stored, summary, maze)
+        }
+        ENCODING_ANSWERS_WHOLE_ROW => {
+            let stored: Stored = serde_json::from_slice(&json).map_err(invalid)?;
+            let head: MatchRecord = serde_json::from_str(row_summary).map_err(invalid_row)?;
+            let trace = replay(&stored.steps, maze, head.limits.max_steps)?;
             Ok(MatchRecord {
                 stderr_tail: stored.stderr_tail,
                 notices: stored.notices,
                 trace,
-                ..summary
+                ..head
             })
         }
         other => Err(format!("unknown match record encoding {other}")),
     }
 }
 
+/// The whole record from its [`ENCODING_ANSWERS`] part, the row's summary and the maze.
+fn complete(stored: Stored, summary: MatchSummary, maze: &Maze) -> Result<MatchRecord, String> {
+    let missing = |what: &str| format!("the match's summary has no {what}");
+    let limits = summary.limits.ok_or_else(|| missing("limits"))?;
+    let trace = replay(&stored.steps, maze, limits.max_steps)?;
+    Ok(MatchRecord {
+        engine_version: summary
+            .engine_version
+            .ok_or_else(|| missing("engine version"))?,
+        protocol: stored.protocol,
+        maze_hash: maze.hash(),
+        maze_dim: maze.dim(),
+        seed: stored.seed,
+        limits,
+        status: summary.status.ok_or_else(|| missing("status"))?,
+        score: stored.score,
+        run0_steps: stored.run0_steps,
+        run1_steps: stored.run1_steps,
+        total_steps: stored.total_steps,
+        warnings: summary.warnings,
+        error: summary.error,
+        stderr_tail: stored.stderr_tail,
+        timings: summary.timings.ok_or_else(|| missing("timings"))?,
+        bot_pid: stored.bot_pid,
+        core: stored.core,
+        notices: stored.notices,
+        maze_layout: None,
+        trace,
+    })
+}
+
 /// Plays the stored answers again on `maze`.
 fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>, String> {
     let n = steps.actions.len();
-    if steps.answer_us.len() != n || steps.cpu_us.len() != n {
+    let by_lag = steps.cpu_us.is_empty();
+    let cpu_len = if by_lag {
+        steps.cpu_lag_us.len()
+    } else {
+        steps.cpu_us.len()
+    };
+    if steps.answer_us.len() != n || cpu_len != n {
         return Err("the stored steps' columns differ in length".into());
     }
     let mut game = Game::new(maze.clone(), GameConfig { max_steps });
@@ -185,7 +272,11 @@ fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>
         trace.push(TraceStep {
             report: game.apply(action),
             answer_us: steps.answer_us[i],
-            cpu_us: steps.cpu_us[i],
+            cpu_us: if by_lag {
+                steps.cpu_lag_us[i].map(|lag| (steps.answer_us[i] as i64 - lag) as u64)
+            } else {
+                steps.cpu_us[i]
+            },
             stderr: steps.stderr.get(&i).cloned().unwrap_or_default(),
             debug: steps.debug.get(&i).cloned(),
         });
@@ -262,7 +353,8 @@ mod tests {
         assert!(!record.warnings.is_empty());
         let (encoding, data) = encode(&record, &maze).unwrap();
         assert_eq!(encoding, ENCODING_ANSWERS);
-        let back = decode(encoding, &data, summary(&record), &maze).unwrap();
+        let row = serde_json::to_string(&summary(&record)).unwrap();
+        let back = decode(encoding, &data, &row, &maze).unwrap();
         assert_eq!(back, record);
         for code in 0..=21 {
             assert_eq!(action_code(code_action(code).unwrap()), Some(code));
@@ -283,11 +375,47 @@ mod tests {
         record.trace[1].report.sensors = [9, 9, 9];
         let (encoding, data) = encode(&record, &maze).unwrap();
         assert_eq!(encoding, ENCODING_JSON);
-        let s = || summary(&record);
-        assert_eq!(decode(encoding, &data, s(), &maze).unwrap(), record);
+        let row = serde_json::to_string(&summary(&record)).unwrap();
+        assert_eq!(decode(encoding, &data, &row, &maze).unwrap(), record);
         // Bytes that are not a record are an error, not a panic.
-        assert!(decode(ENCODING_ANSWERS, b"nonsense", s(), &maze).is_err());
-        assert!(decode(7, &data, s(), &maze).is_err());
+        assert!(decode(ENCODING_ANSWERS, b"nonsense", &row, &maze).is_err());
+        assert!(decode(7, &data, &row, &maze).is_err());
+        // Nor is a row without a summary.
+        let (encoding, data) = encode(&played(&maze, &[Action::RESET]), &maze).unwrap();
+        assert_eq!(encoding, ENCODING_ANSWERS);
+        for row in ["", "{}", r#"{"status":"finished"}"#] {
+            let err = decode(encoding, &data, row, &maze).unwrap_err();
+            assert!(err.contains("summary"), "{err}");
+        }
+    }
+
+    #[test]
+    fn records_of_the_earlier_encoding_with_the_whole_row_still_read() {
+        let maze = generator::generate(12, 4).unwrap();
+        let record = played(&maze, &solver::solve(&maze).unwrap().actions);
+        // As development builds wrote it: the record but its trace, stderr tail and
+        // notices in the row; the answers and those in the bytes.
+        let row = serde_json::to_string(&MatchRecord {
+            trace: Vec::new(),
+            stderr_tail: String::new(),
+            ..record.clone()
+        })
+        .unwrap();
+        let (_, data) = encode(&record, &maze).unwrap();
+        let mut stored: serde_json::Value =
+            serde_json::from_slice(&zstd::stream::decode_all(&data[..]).unwrap()).unwrap();
+        stored
+            .as_object_mut()
+            .unwrap()
+            .retain(|k, _| ["stderr_tail", "notices", "steps"].contains(&k.as_str()));
+        let steps = stored["steps"].as_object_mut().unwrap();
+        let lags = steps.remove("cpu_lag_us").unwrap();
+        let cpu: Vec<Option<u64>> = record.trace.iter().map(|s| s.cpu_us).collect();
+        assert_eq!(lags.as_array().unwrap().len(), cpu.len());
+        steps.insert("cpu_us".into(), serde_json::to_value(cpu).unwrap());
+        let old = zstd::bulk::compress(&serde_json::to_vec(&stored).unwrap(), LEVEL).unwrap();
+        let back = decode(ENCODING_ANSWERS_WHOLE_ROW, &old, &row, &maze).unwrap();
+        assert_eq!(back, record);
     }
 
     #[test]
@@ -295,10 +423,25 @@ mod tests {
         let maze = generator::generate(12, 4).unwrap();
         let record = played(&maze, &solver::solve(&maze).unwrap().actions);
         let s = summary(&record);
-        assert!(s.trace.is_empty() && s.stderr_tail.is_empty());
         assert_eq!(
-            (s.status, s.total_steps),
-            (record.status, record.total_steps)
+            (s.status, s.limits.as_ref(), s.timings),
+            (
+                Some(record.status),
+                Some(&record.limits),
+                Some(record.timings)
+            )
         );
+        // What the row's columns or the maze hold is not repeated.
+        let row = serde_json::to_value(&s).unwrap();
+        for key in [
+            "seed",
+            "score",
+            "total_steps",
+            "maze_hash",
+            "stderr_tail",
+            "trace",
+        ] {
+            assert!(row.get(key).is_none(), "{key} in {row}");
+        }
     }
 }
