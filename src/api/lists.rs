@@ -7,7 +7,7 @@ use utoipa::{IntoParams, ToSchema};
 use super::error::{ApiError, ApiResult};
 use super::matches::MatchView;
 use crate::runner::MatchState;
-use crate::storage::matches::{MatchFilter, Page};
+use crate::storage::matches::{MatchFilter, MatchRow, Page};
 
 /// Filters and page of `GET /api/matches`.
 #[derive(Debug, Deserialize, IntoParams)]
@@ -22,6 +22,10 @@ pub struct MatchListQuery {
     /// Only this status: queued, running, finished, step_limit, timeout, crashed,
     /// protocol_error, memory_limit, process_limit, scratch_limit, aborted.
     pub status: Option<String>,
+    /// Only matches older than this match id: the next page after one that ended with
+    /// it (pass the page's `next_before`). It costs the same however deep the page,
+    /// unlike `offset`.
+    pub before: Option<i64>,
     /// Rows to skip (default 0).
     pub offset: Option<i64>,
     /// Rows per page, 1 to 200 (default 50).
@@ -33,8 +37,12 @@ pub struct MatchListQuery {
 pub struct MatchPage {
     /// The matches, newest first.
     pub items: Vec<MatchView>,
-    /// How many matches pass the filters.
+    /// How many matches pass the filters (without `before`), counted up to 10,000.
     pub total: i64,
+    /// False when more than `total` pass: counting stops at 10,000.
+    pub total_exact: bool,
+    /// The `before` of the next page: the last match's id when the page is full.
+    pub next_before: Option<i64>,
     /// Rows skipped.
     pub offset: i64,
     /// Rows per page.
@@ -54,6 +62,7 @@ impl MatchListQuery {
                 tournament_id: self.tournament_id,
                 maze_id: self.maze_id,
                 status,
+                before: self.before,
             },
             page(self.offset, self.limit)?,
         ))
@@ -73,6 +82,14 @@ pub fn page(offset: Option<i64>, limit: Option<i64>) -> ApiResult<Page> {
         )));
     }
     Ok(Page { offset, limit })
+}
+
+/// The `before` of the page after `rows` (a page of `page`): its last match's id, when
+/// the page is full.
+pub fn next_before(rows: &[MatchRow], page: Page) -> Option<i64> {
+    rows.last()
+        .filter(|_| rows.len() as i64 == page.limit)
+        .map(|r| r.match_id)
 }
 
 /// Rows per page of a list, unless asked.

@@ -16,7 +16,7 @@ use utoipa_axum::routes;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
-use super::lists::{MatchListQuery, MatchPage};
+use super::lists::{MatchListQuery, MatchPage, next_before};
 use super::mazes::{find_maze, hidden_error};
 use crate::storage::bots::build_status;
 use crate::storage::matches::MatchRow;
@@ -274,7 +274,8 @@ async fn list_matches(
     AppQuery(q): AppQuery<MatchListQuery>,
 ) -> ApiResult<axum::Json<MatchPage>> {
     let (filter, page) = q.parse()?;
-    let (rows, total) = state.storage.list_matches(&filter, page).await?;
+    let (rows, count) = state.storage.list_matches(&filter, page).await?;
+    let next_before = next_before(&rows, page);
     let admin = caller.is_admin();
     Ok(axum::Json(MatchPage {
         items: rows
@@ -284,7 +285,9 @@ async fn list_matches(
                 match_view(r, reveal)
             })
             .collect(),
-        total,
+        total: count.total,
+        total_exact: count.exact,
+        next_before,
         offset: page.offset,
         limit: page.limit,
     }))

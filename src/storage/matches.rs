@@ -3,7 +3,7 @@
 //! A match whose lease expired (its server died while it ran) is retried a bounded
 //! number of times ([`super::retries`]).
 
-use sqlx::FromRow;
+use sqlx::{FromRow, QueryBuilder, Sqlite};
 
 use super::{Result, Storage, StorageError, now_ms, records};
 use crate::engine::{Maze, mazefile};
@@ -156,7 +156,23 @@ pub struct MatchFilter {
     pub maze_id: Option<i64>,
     /// Only matches in this state.
     pub status: Option<MatchState>,
+    /// Only matches older than this one (smaller ids): the page after a page that ends
+    /// with it. Unlike an offset, it costs the same however deep the page.
+    pub before: Option<i64>,
 }
+
+/// How many matches pass a filter, counted up to [`COUNT_CAP`] so that a count costs
+/// the same at a million matches as at a thousand.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MatchCount {
+    /// The number counted (at most [`COUNT_CAP`]).
+    pub total: i64,
+    /// False when more pass than were counted.
+    pub exact: bool,
+}
+
+/// The most matches a list counts.
+pub const COUNT_CAP: i64 = 10_000;
 
 /// One page of a list: at most `limit` rows after skipping `offset`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -167,12 +183,14 @@ pub struct Page {
     pub limit: i64,
 }
 
+/// A match with its names; the match table leads (`cross join` keeps SQLite from
+/// starting elsewhere), so that a filtered list walks the filter's index.
 const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
         z.name as maze_name, z.hidden as maze_hidden, z.hash as maze_hash, z.dim as maze_dim, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
         m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at
-     from match m join bot_version v on v.bot_version_id = m.bot_version_id
-     join bot b on b.bot_id = v.bot_id
-     join maze z on z.maze_id = m.maze_id";
+     from match m cross join bot_version v on v.bot_version_id = m.bot_version_id
+     cross join bot b on b.bot_id = v.bot_id
+     cross join maze z on z.maze_id = m.maze_id";
 
 impl Storage {
     /// Queues a single match.
@@ -468,7 +486,8 @@ impl Storage {
         )
     }
 
-    /// One page of the matches that pass `filter`, newest first, and how many pass it.
+    /// One page of the matches that pass `filter`, newest first, and how many pass it
+    /// (without its `before`).
     ///
     /// # Errors
     /// Database failures.
@@ -476,31 +495,25 @@ impl Storage {
         &self,
         filter: &MatchFilter,
         page: Page,
-    ) -> Result<(Vec<MatchRow>, i64)> {
-        const WHERE: &str =
-            "where (?1 is null or v.bot_id = ?1) and (?2 is null or m.tournament_id = ?2)
-                 and (?3 is null or m.maze_id = ?3) and (?4 is null or m.status = ?4)";
-        let rows = sqlx::query_as(&format!(
-            "{MATCH_SELECT} {WHERE} order by m.match_id desc limit ?5 offset ?6"
+    ) -> Result<(Vec<MatchRow>, MatchCount)> {
+        let mut rows = QueryBuilder::new(MATCH_SELECT);
+        push_filter(&mut rows, filter, true);
+        rows.push(" order by m.match_id desc limit ")
+            .push_bind(page.limit)
+            .push(" offset ")
+            .push_bind(page.offset);
+        let rows = rows.build_query_as().fetch_all(self.pool()).await?;
+        let mut count = QueryBuilder::new("select count(*) from (select 1 from match m");
+        push_filter(&mut count, filter, false);
+        count.push(" limit ").push_bind(COUNT_CAP + 1).push(")");
+        let counted: i64 = count.build_query_scalar().fetch_one(self.pool()).await?;
+        Ok((
+            rows,
+            MatchCount {
+                total: counted.min(COUNT_CAP),
+                exact: counted <= COUNT_CAP,
+            },
         ))
-        .bind(filter.bot_id)
-        .bind(filter.tournament_id)
-        .bind(filter.maze_id)
-        .bind(filter.status.map(MatchState::as_str))
-        .bind(page.limit)
-        .bind(page.offset)
-        .fetch_all(self.pool())
-        .await?;
-        let total: i64 = sqlx::query_scalar(&format!(
-            "select count(*) from match m join bot_version v on v.bot_version_id = m.bot_version_id {WHERE}"
-        ))
-        .bind(filter.bot_id)
-        .bind(filter.tournament_id)
-        .bind(filter.maze_id)
-        .bind(filter.status.map(MatchState::as_str))
-        .fetch_one(self.pool())
-        .await?;
-        Ok((rows, total))
     }
 
     /// Matches of a tournament, by id.
@@ -526,6 +539,30 @@ impl Storage {
                 .fetch_all(self.pool())
                 .await?,
         )
+    }
+}
+
+/// Appends `filter` as the where clause of a query on `match m`: only the conditions it
+/// sets, so that the database can use the index each one has (`before` only if
+/// `keyset`).
+fn push_filter(query: &mut QueryBuilder<'_, Sqlite>, filter: &MatchFilter, keyset: bool) {
+    query.push(" where 1 = 1");
+    if let Some(bot_id) = filter.bot_id {
+        query.push(" and m.bot_id = ").push_bind(bot_id);
+    }
+    if let Some(tournament_id) = filter.tournament_id {
+        query
+            .push(" and m.tournament_id = ")
+            .push_bind(tournament_id);
+    }
+    if let Some(maze_id) = filter.maze_id {
+        query.push(" and m.maze_id = ").push_bind(maze_id);
+    }
+    if let Some(status) = filter.status {
+        query.push(" and m.status = ").push_bind(status.as_str());
+    }
+    if let Some(before) = filter.before.filter(|_| keyset) {
+        query.push(" and m.match_id < ").push_bind(before);
     }
 }
 
@@ -671,6 +708,68 @@ mod tests {
                 .unwrap()
                 .done,
             2
+        );
+    }
+
+    #[tokio::test]
+    async fn lists_page_by_the_last_match_shown_and_count_up_to_a_cap() {
+        let (db, _dir) = fresh().await;
+        let (v, z) = bot_and_maze(&db).await;
+        let bot = db.get_bot_version(v).await.unwrap().unwrap().bot_id;
+        let mut ids = Vec::new();
+        for seed in 0..5 {
+            ids.push(db.queue_match(v, z, seed).await.unwrap());
+        }
+        let page = Page {
+            offset: 0,
+            limit: 2,
+        };
+        let list = |filter: MatchFilter| {
+            let db = db.clone();
+            async move {
+                let (rows, count) = db.list_matches(&filter, page).await.unwrap();
+                (rows.iter().map(|r| r.match_id).collect::<Vec<_>>(), count)
+            }
+        };
+        let exact = |total| MatchCount { total, exact: true };
+        assert_eq!(
+            list(MatchFilter::default()).await,
+            (vec![ids[4], ids[3]], exact(5))
+        );
+        // The next page starts before the last match shown; the count is the list's.
+        let older = MatchFilter {
+            before: Some(ids[3]),
+            ..MatchFilter::default()
+        };
+        assert_eq!(list(older).await, (vec![ids[2], ids[1]], exact(5)));
+        // Each row knows its bot (the filter's index), whoever wrote it.
+        let of = |bot_id| MatchFilter {
+            bot_id: Some(bot_id),
+            status: Some(MatchState::Queued),
+            ..MatchFilter::default()
+        };
+        assert_eq!(list(of(bot)).await.1, exact(5));
+        assert_eq!(list(of(bot + 1)).await, (vec![], exact(0)));
+        // Past the cap, the count says so instead of counting on.
+        sqlx::query(
+            "with recursive n(i) as (select 1 union all select i + 1 from n where i < ?)
+             insert into match (bot_version_id, maze_id, seed, priority, created_at)
+             select ?, ?, i, 0, 0 from n",
+        )
+        .bind(COUNT_CAP)
+        .bind(v)
+        .bind(z)
+        .execute(db.pool())
+        .await
+        .unwrap();
+        let (rows, count) = list(of(bot)).await;
+        assert_eq!(rows.len(), 2);
+        assert_eq!(
+            count,
+            MatchCount {
+                total: COUNT_CAP,
+                exact: false
+            }
         );
     }
 }

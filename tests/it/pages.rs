@@ -121,10 +121,19 @@ async fn match_lists_filter_and_page() {
         .map(|m| m["match_id"].as_i64().unwrap())
         .collect();
     assert_eq!(got, [ids[2], ids[1]], "newest first");
-    let (_, page2) = server
-        .get(&format!("/api/matches?bot_id={a}&limit=2&offset=2"), None)
-        .await;
-    assert_eq!(page2["items"][0]["match_id"], ids[0]);
+    assert_eq!(
+        (&page["total_exact"], &page["next_before"]),
+        (&json!(true), &json!(ids[1]))
+    );
+    // The next page starts before the last match shown (or at an offset).
+    for next in [format!("before={}", ids[1]), "offset=2".to_string()] {
+        let (_, page2) = server
+            .get(&format!("/api/matches?bot_id={a}&limit=2&{next}"), None)
+            .await;
+        assert_eq!(page2["items"][0]["match_id"], ids[0], "{next}");
+        assert_eq!(page2["total"], 3);
+        assert!(page2["next_before"].is_null(), "{page2}");
+    }
     let (_, on1) = server
         .get("/api/matches?maze_id=1&status=finished", None)
         .await;
@@ -146,7 +155,10 @@ async fn match_lists_filter_and_page() {
             && !html.contains(&format!("href=\"/matches/{}\"", ids[0]))
     );
     assert!(
-        html.contains(&format!("/matches?bot_id={a}&amp;offset=2&amp;limit=2")),
+        html.contains(&format!(
+            "/matches?bot_id={a}&amp;before={}&amp;limit=2",
+            ids[1]
+        )) && html.contains("3 matches"),
         "{html}"
     );
     let (_, ts) = server.get("/api/tournaments", None).await;

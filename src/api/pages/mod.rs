@@ -19,8 +19,8 @@ use super::lists::{MatchListQuery, page};
 use crate::engine::{mazefile, render, solver};
 use crate::runner::{MatchRecord, MatchState, MatchStatus};
 use crate::storage::leaderboard::Scope;
-use crate::storage::matches::{MatchFilter, MatchRow, Page};
-use crate::web::pages::{self as web, MatchLine, Pager, SortKey};
+use crate::storage::matches::{MatchCount, MatchFilter, MatchRow, Page};
+use crate::web::pages::{self as web, MatchLine, MatchPager, Pager, SortKey};
 use crate::web::viewer::ViewerData;
 
 mod board;
@@ -59,13 +59,16 @@ fn line(row: MatchRow) -> MatchLine {
 }
 
 /// The latest [`RECENT`] matches that pass `filter`, as lines, and how many pass it.
-async fn recent_matches(state: &AppState, filter: MatchFilter) -> ApiResult<(Vec<MatchLine>, i64)> {
+async fn recent_matches(
+    state: &AppState,
+    filter: MatchFilter,
+) -> ApiResult<(Vec<MatchLine>, MatchCount)> {
     let page = Page {
         offset: 0,
         limit: RECENT,
     };
-    let (rows, total) = state.storage.list_matches(&filter, page).await?;
-    Ok((rows.into_iter().map(line).collect(), total))
+    let (rows, count) = state.storage.list_matches(&filter, page).await?;
+    Ok((rows.into_iter().map(line).collect(), count))
 }
 
 /// A failure's reason as anyone may see it: on a hidden maze only its step (the text
@@ -142,7 +145,8 @@ async fn matches_page(
     AppQuery(q): AppQuery<MatchListQuery>,
 ) -> ApiResult<Html<String>> {
     let (filter, page) = q.parse()?;
-    let (rows, total) = state.storage.list_matches(&filter, page).await?;
+    let (rows, count) = state.storage.list_matches(&filter, page).await?;
+    let next_before = super::lists::next_before(&rows, page);
     let mut parts = Vec::new();
     let mut query = Vec::new();
     if let Some(b) = filter.bot_id {
@@ -164,15 +168,16 @@ async fn matches_page(
         query.push(format!("status={s}"));
     }
     let lines: Vec<MatchLine> = rows.into_iter().map(line).collect();
-    let pager = Pager {
+    let pager = MatchPager {
         base: if query.is_empty() {
             "/matches".into()
         } else {
             format!("/matches?{}", query.join("&"))
         },
-        offset: page.offset,
         limit: page.limit,
-        total,
+        count,
+        first_page: filter.before.is_none() && page.offset == 0,
+        next_before,
     };
     let filters = if parts.is_empty() {
         String::new()

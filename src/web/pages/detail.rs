@@ -6,8 +6,9 @@ use maud::{PreEscaped, html};
 use super::super::layout::{page, score, status, time};
 use super::super::viewer::{ViewerData, embed};
 use super::board::{StandingsSection, standings_table};
-use super::lists::{MatchLine, match_table, opt};
+use super::lists::{MatchLine, count_text, match_table, opt};
 use crate::storage::bots::{BotRow, BotVersionRow};
+use crate::storage::matches::MatchCount;
 use crate::storage::mazes::MazeRow;
 use crate::storage::tournaments::TournamentRow;
 
@@ -21,7 +22,7 @@ pub struct BotPage {
     /// Its recent matches.
     pub recent: Vec<MatchLine>,
     /// How many matches it has in all.
-    pub total_matches: i64,
+    pub total_matches: MatchCount,
 }
 
 /// A bot's page: versions, recent matches; the owner can paste their token to see the
@@ -63,7 +64,7 @@ pub fn bot(p: &BotPage) -> String {
         }
         h2 { "Recent matches" }
         (match_table(&p.recent))
-        p { a href={ "/matches?bot_id=" (b.bot_id) } { "All " (p.total_matches) " matches" } }
+        p { a href={ "/matches?bot_id=" (b.bot_id) } { "All " (count_text(p.total_matches)) } }
         h2 { "Owner's logs" }
         p.muted { "The bot's owner can see each failed match's stderr and the build logs: paste the owner token (it stays in this page and is sent only to this server's API)." }
         form.inline #owner-form {

@@ -5,7 +5,7 @@ use maud::{Markup, html};
 use super::super::layout::{page, score, status, time};
 use super::board::{maze_table, tournament_table};
 use crate::storage::bots::BotRow;
-use crate::storage::matches::MatchRow;
+use crate::storage::matches::{MatchCount, MatchRow};
 use crate::storage::mazes::MazeRow;
 use crate::storage::tournaments::TournamentRow;
 
@@ -84,6 +84,49 @@ impl Pager {
     }
 }
 
+/// Links through a list of matches a page at a time, older by `before` the last match
+/// shown (the same cost however deep), and how many there are.
+#[derive(Debug, Clone)]
+pub struct MatchPager {
+    /// The list's path and query without `before`, `offset` and `limit`.
+    pub base: String,
+    /// Rows per page.
+    pub limit: i64,
+    /// How many matches pass the list's filters.
+    pub count: MatchCount,
+    /// Whether this is the list's first (newest) page.
+    pub first_page: bool,
+    /// The last match shown, when the page is full (an older page may follow).
+    pub next_before: Option<i64>,
+}
+
+impl MatchPager {
+    /// The links.
+    pub fn links(&self) -> Markup {
+        let sep = if self.base.contains('?') { '&' } else { '?' };
+        html! {
+            div.pager {
+                span.muted { (count_text(self.count)) }
+                @if !self.first_page {
+                    a rel="first" href={ (self.base) (sep) "limit=" (self.limit) } { "← newest" }
+                }
+                @if let Some(before) = self.next_before {
+                    a rel="next" href={ (self.base) (sep) "before=" (before) "&limit=" (self.limit) } { "older →" }
+                }
+            }
+        }
+    }
+}
+
+/// "12 matches", or "more than 10000 matches" past what lists count.
+pub fn count_text(count: MatchCount) -> String {
+    match (count.total, count.exact) {
+        (1, true) => "1 match".into(),
+        (n, true) => format!("{n} matches"),
+        (n, false) => format!("more than {n} matches"),
+    }
+}
+
 /// A match in a list, with the names to show and what may be said of its failure.
 #[derive(Debug, Clone)]
 pub struct MatchLine {
@@ -127,7 +170,7 @@ pub(super) fn opt(v: Option<i64>) -> Markup {
 }
 
 /// The list of matches, with its filters.
-pub fn matches(lines: &[MatchLine], filters: &str, pager: &Pager) -> String {
+pub fn matches(lines: &[MatchLine], filters: &str, pager: &MatchPager) -> String {
     page(
         "Matches",
         html! {
@@ -154,5 +197,31 @@ mod tests {
         let html = p.links().into_string();
         assert!(html.contains("/matches?bot_id=2&amp;offset=0&amp;limit=50"));
         assert!(html.contains("/matches?bot_id=2&amp;offset=100&amp;limit=50"));
+    }
+
+    #[test]
+    fn match_pages_go_older_by_the_last_match_shown() {
+        let mut p = MatchPager {
+            base: "/matches?bot_id=2".into(),
+            limit: 50,
+            count: MatchCount {
+                total: 10_000,
+                exact: false,
+            },
+            first_page: true,
+            next_before: Some(700),
+        };
+        let html = p.links().into_string();
+        assert!(
+            html.contains("/matches?bot_id=2&amp;before=700&amp;limit=50"),
+            "{html}"
+        );
+        assert!(html.contains("more than 10000 matches") && !html.contains("newest"));
+        p.first_page = false;
+        p.next_before = None;
+        p.count.exact = true;
+        let html = p.links().into_string();
+        assert!(html.contains("10000 matches") && html.contains("newest"));
+        assert!(!html.contains("older") && !html.contains("more than"));
     }
 }
