@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use mazearena::engine::{Action, solver};
-use mazearena::runner::{BotSpec, Limits, MatchRecord, MatchStatus, run_match};
+use mazearena::runner::{BotSpec, Limits, MatchRecord, MatchStatus, Sandbox, run_match};
 
 use crate::support::{classic, fixture_bot, live_group_members, root, sandbox};
 
@@ -129,6 +129,29 @@ async fn a_slow_start_times_out() {
     let r = play(fixture_bot("slow_start", &[]), limits).await;
     assert_eq!(r.status, MatchStatus::Timeout);
     assert!(reason(&r).contains("startup"), "{}", reason(&r));
+}
+
+#[tokio::test]
+async fn each_step_records_the_cpu_time_the_bot_spent_on_it_with_and_without_the_sandbox() {
+    for sandbox in [Sandbox::None, sandbox()] {
+        let bot = fixture_bot("busy_step", &[]);
+        let limits = Limits {
+            max_steps: 8,
+            ..limits()
+        };
+        let r = run_match(&bot, &classic(1), 7, limits, &sandbox, |_| {}).await;
+        assert_eq!(r.status, MatchStatus::StepLimit, "{:?}", r.error);
+        let cpu: Vec<u64> = r.trace.iter().map(|s| s.cpu_us.unwrap()).collect();
+        // 200 ms of CPU before the third answer, and little before the others (the first
+        // holds Python's start).
+        assert!(
+            (190_000..=r.trace[2].answer_us).contains(&cpu[2]),
+            "{cpu:?}"
+        );
+        for (i, &c) in cpu.iter().enumerate().skip(3) {
+            assert!(c < 20_000, "step {}: {cpu:?}", i + 1);
+        }
+    }
 }
 
 #[tokio::test]

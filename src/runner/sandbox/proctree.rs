@@ -82,18 +82,6 @@ pub fn usage(root: u32) -> TreeUsage {
     total
 }
 
-/// CPU time of one process (user + system, with its waited-for children), in µs; 0
-/// when it is gone.
-pub fn process_cpu_us(pid: u32) -> u64 {
-    stat_fields(pid).map_or(0, |f| cpu_us_of_stat(&f))
-}
-
-fn cpu_us_of_stat(fields: &[u64]) -> u64 {
-    fields
-        .get(10..14)
-        .map_or(0, |t| t.iter().sum::<u64>() * 1_000_000 / clock_ticks())
-}
-
 /// A small kernel file (a counter) read again and again through one open handle: a
 /// read from offset 0 each time, without opening the file per read (which costs more
 /// than the rest of a step).
@@ -116,18 +104,6 @@ impl OpenCounter {
         let mut buf = [0u8; 4096];
         let n = self.file.read_at(&mut buf, 0).ok()?;
         String::from_utf8(buf[..n].to_vec()).ok()
-    }
-
-    /// The CPU time in µs of a `/proc/PID/stat` opened as this counter.
-    pub fn process_cpu_us(&self) -> Option<u64> {
-        let stat = self.read()?;
-        let rest = stat.get(stat.rfind(')')? + 2..)?;
-        let fields: Vec<u64> = rest
-            .split_whitespace()
-            .skip(1)
-            .map(|f| f.parse::<u64>().unwrap_or(0))
-            .collect();
-        Some(cpu_us_of_stat(&fields))
     }
 }
 

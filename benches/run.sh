@@ -1,0 +1,132 @@
+#!/usr/bin/env bash
+# Runs every benchmark and writes BENCHMARKS.md (date, machine, commit, then one section
+# a benchmark, each figure beside its floor or baseline measured in the same run).
+#
+#   bash benches/run.sh            (about 30 minutes on 2 cores)
+#   bash benches/run.sh --quick    (a few minutes: fewer runs, smaller databases and
+#                                   samples; to check the scripts, not for the figures)
+#
+# Needs gcc, python3, bubblewrap and wrk (the HTTP benchmark installs wrk with apt-get
+# if it is missing), and ../shared/mazes beside the checkout. Run it on a quiet machine:
+# the figures are medians of runs taken in turn, but a busy core still shows.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+QUICK=${1:-}
+if [ "$QUICK" = --quick ]; then
+  RUNS=3 STEP_RUNS=3 PAGE_SIZES="1000" PAGE_RUNS=5 EVERY=17 T_RUNS=1 OVERHEAD=5
+  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1
+else
+  RUNS=5 STEP_RUNS=11 PAGE_SIZES="1000 100000" PAGE_RUNS=21 EVERY=1 T_RUNS=3 OVERHEAD=20
+  HTTP_ARGS=() ADAPTER_RUNS=11
+fi
+out=$(mktemp)
+trap 'rm -f "$out"' EXIT
+log() { echo "== $*" >&2; }
+
+cargo build --release --locked --quiet
+commit=$(git rev-parse --short HEAD)
+git diff --quiet HEAD -- src migrations Cargo.toml Cargo.lock || commit="$commit (with local changes)"
+cpu=$(awk -F': ' '/^model name/ {print $2; exit}' /proc/cpuinfo)
+mem=$(awk '/^MemTotal/ {printf "%.0f GiB", $2 / 1048576}' /proc/meminfo)
+virt=$(systemd-detect-virt 2>/dev/null || echo "unknown")
+{
+  echo "# Benchmarks"
+  echo
+  echo "Written by \`bash benches/run.sh\` on $(date -u +%Y-%m-%d) at commit $commit:"
+  echo "$(nproc) cores ($cpu), $mem, Linux $(uname -r) (virtualization: $virt),"
+  echo "$(rustc --version | cut -d' ' -f1-2), release build, as $(id -un)."
+  echo "Each figure stands beside its floor or baseline, measured in the same run, taken in"
+  echo "turn with it; the scripts named in each section reproduce it alone."
+  echo
+} >"$out"
+
+log "engine and solver (criterion)"
+cargo bench --locked --bench engine -- --warm-up-time 1 --measurement-time 3 >&2
+python3 - >>"$out" <<'PY'
+import json, os
+def median_ns(group, name):
+    path = os.path.join("target", "criterion", group, name, "new", "estimates.json")
+    return json.load(open(path))["median"]["point_estimate"]
+engine = median_ns("game_1000_steps", "engine")
+both = median_ns("game_1000_steps", "engine_and_protocol")
+print("## The referee alone (criterion)")
+print()
+print("`cargo bench --bench engine` (benches/engine.rs): medians of criterion's samples.")
+print()
+print("| measure | time | per step | steps per second |")
+print("|---|---:|---:|---:|")
+print(f"| a 1000-step game (engine only) | {engine / 1000:.1f} µs | {engine / 1000:.0f} ns | {1e12 / engine:,.0f} |")
+print(f"| the same with each step's protocol lines (sense encoded, answer decoded) | {both / 1000:.1f} µs | {both / 1000:.0f} ns | {1e12 / both:,.0f} |")
+print()
+print("| classic maze | reading the file (baseline) | solving it (fewest run-1 steps) |")
+print("|---|---:|---:|")
+for m in ("test_maze_01", "test_maze_02", "test_maze_03"):
+    print(f"| {m} | {median_ns('solver', m + '_read') / 1000:.1f} µs | {median_ns('solver', m + '_solve') / 1000:.1f} µs |")
+print()
+PY
+
+log "per-step latency"
+{
+  echo "## Per-step latency against the pipe floor"
+  echo
+  echo "\`bash benches/step_latency.sh $STEP_RUNS\`: a 1000-step match of benches/trivial_bot.c, started"
+  echo "as a user starts it (no pinning by the caller), beside benches/pingpong.c (one short"
+  echo "line each way through pipes between two processes), taken in turn. \"Per step in the"
+  echo "match\" is the match's wall time less its first answer (the bot's start) over the other"
+  echo "999 steps; \"exchange\" is the answer time the referee measures (sense written to answer"
+  echo "read). Target: per step at most 2x the same-core floor."
+  echo
+  bash benches/step_latency.sh "$STEP_RUNS"
+  echo
+} >>"$out"
+
+log "the original tester's way against the adapter"
+{ bash benches/adapter.sh "$ADAPTER_RUNS"; echo; } >>"$out"
+
+log "tournaments"
+{ bash benches/tournament.sh "$T_RUNS"; echo; } >>"$out"
+
+log "the sandbox's cost per match"
+{
+  echo "## The sandbox's cost per match"
+  echo
+  echo "\`bash benches/match_overhead.sh $OVERHEAD\`: one whole \`mazearena run\` of a trivial compiled"
+  echo "bot (a 1000-step match, process start to exit), baseline first and last."
+  echo
+  bash benches/match_overhead.sh "$OVERHEAD" | sed 's/^/    /'
+  echo
+} >>"$out"
+
+log "HTTP under load"
+{ bash benches/http.sh "${HTTP_ARGS[@]}"; echo; } >>"$out"
+
+log "pages one request at a time"
+{
+  echo "## Pages, one request at a time"
+  echo
+  echo "\`bash benches/pages.sh N $PAGE_RUNS\`: a database of N matches filled by benches/fill_db.py"
+  echo "(copies of one real tournament of the shipped bots on the shipped mazes); one request at"
+  echo "a time with curl, the routes taken in turn; \`/healthz\` is the floor."
+  echo
+  for n in $PAGE_SIZES; do
+    bash benches/pages.sh "$n" "$PAGE_RUNS"
+    echo
+  done
+} >>"$out"
+
+log "bytes per stored match"
+{
+  echo "## Bytes per stored match"
+  echo
+  echo "\`bash benches/storage.sh $EVERY\`: a tournament of every shipped bot on every ${EVERY}th contest maze"
+  echo "of ../shared/mazes/micromouseonline/classic, then the database's bytes per match. Target:"
+  echo "at most 4 KB a match. Release 0.1.0 stored 122,400 B a match here (record and trace as"
+  echo "JSON in the match row; measured on a 30-maze sample)."
+  echo
+  bash benches/storage.sh "$EVERY" | sed 's/^/    /'
+  echo
+} >>"$out"
+
+mv "$out" BENCHMARKS.md
+trap - EXIT
+log "wrote BENCHMARKS.md"

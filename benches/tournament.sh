@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Tournament throughput and memory: the two shipped Rust bots (bots/rust: the champion
+# and the minimal bot) on every contest maze of ../shared/mazes/micromouseonline/classic
+# (1,012 matches: 506 distinct mazes, duplicates once), with `--jobs 1` and `--jobs 2`,
+# with and without the sandbox. The four settings are taken in turn RUNS times (medians
+# of the wall time, start to exit); the peak resident memory of the mazearena process
+# (VmHWM, read from /proc while it runs) is the largest of each setting's runs.
+#
+#   bash benches/tournament.sh [RUNS]      (default 3; about 2 minutes a round)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+RUNS=${1:-3}
+cargo build --release --locked --quiet
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+(cd bots/rust && CARGO_TARGET_DIR="$PWD/target" cargo build --release --quiet)
+
+run() { # $1: jobs, $2: sandbox; prints "seconds peak_kib matches"
+  local db=$tmp/t-$1-$2.db a b pid peak=0 hwm
+  rm -f "$db"*
+  a=$(date +%s%N)
+  ./target/release/mazearena tournament --bots bots/rust \
+    --mazes ../shared/mazes/micromouseonline/classic --jobs "$1" --sandbox "$2" \
+    --database "sqlite://$db" --json >"$tmp/out.json" 2>"$tmp/err.log" &
+  pid=$!
+  while kill -0 "$pid" 2>/dev/null; do
+    hwm=$(awk '/^VmHWM/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
+    [ -n "$hwm" ] && [ "$hwm" -gt "$peak" ] && peak=$hwm
+    sleep 0.05
+  done
+  wait "$pid" || { cat "$tmp/err.log" >&2; exit 1; }
+  b=$(date +%s%N)
+  matches=$(python3 -c "import json,sys; print(len(json.load(open(sys.argv[1]))['matches']))" "$tmp/out.json")
+  echo "$(( (b - a) / 1000000 )) $peak $matches"
+}
+
+declare -A WALL PEAK
+SETTINGS=("1 none" "2 none" "1 full" "2 full")
+for ((i = 1; i <= RUNS; i++)); do
+  for s in "${SETTINGS[@]}"; do
+    # shellcheck disable=SC2086
+    read -r ms kib n < <(run $s)
+    echo "round $i: jobs ${s% *}, sandbox ${s#* }: ${ms} ms, peak ${kib} KiB, $n matches" >&2
+    WALL[$s]+="$ms "
+    PEAK[$s]+="$kib "
+    MATCHES=$n
+  done
+done
+
+echo "## Tournament throughput and memory"
+echo
+echo "\`bash benches/tournament.sh $RUNS\`: the two shipped Rust bots on every contest maze"
+echo "($MATCHES matches a tournament), the four settings taken in turn $RUNS times; medians"
+echo "of the whole command's wall time; peak resident memory (VmHWM) of the mazearena"
+echo "process, the largest of the runs."
+echo
+python3 - "$MATCHES" "${WALL[1 none]}" "${WALL[2 none]}" "${WALL[1 full]}" "${WALL[2 full]}" \
+  "${PEAK[1 none]}" "${PEAK[2 none]}" "${PEAK[1 full]}" "${PEAK[2 full]}" <<'PY'
+import statistics, sys
+n = int(sys.argv[1])
+walls = [statistics.median(map(int, a.split())) for a in sys.argv[2:6]]
+peaks = [max(map(int, a.split())) for a in sys.argv[6:10]]
+names = ["--jobs 1, --sandbox none", "--jobs 2, --sandbox none",
+         "--jobs 1, --sandbox full", "--jobs 2, --sandbox full"]
+print("| setting | wall | matches per minute | peak memory |")
+print("|---|---:|---:|---:|")
+for name, w, p in zip(names, walls, peaks):
+    print(f"| {name} | {w / 1000:.1f} s | {n * 60000 / w:.0f} | {p / 1024:.1f} MiB |")
+print()
+print(f"Scaling `--jobs 2` / `--jobs 1`: {walls[0] / walls[1]:.2f}x without the sandbox, "
+      f"{walls[2] / walls[3]:.2f}x with it (target: at least 1.9x). The sandbox costs "
+      f"{(walls[3] / walls[1] - 1) * 100:.0f}% of the wall time with two jobs "
+      f"({(walls[3] - walls[1]) * 2 / n:.1f} ms of a core per match).")
+PY
