@@ -25,11 +25,14 @@ SERVER=$!
 trap 'kill $SERVER 2>/dev/null || true' EXIT
 until curl -s -o /dev/null "http://127.0.0.1:$PORT/healthz"; do sleep 0.2; done
 
-ROUTES=(/healthz / "/api/leaderboard?scope=all" "/api/leaderboard?tournament=2" /tournaments/1 /matches /api/matches/5)
+ROUTES=(/healthz / "/api/leaderboard?scope=all" "/api/leaderboard?tournament=2" /tournaments/1
+  /matches "/matches?bot_id=3" "/api/matches?status=crashed" "/api/matches?maze_id=4&before=500"
+  /bots/3 /api/bots /api/matches/5)
 declare -A TIMES
 for ((i = 0; i < RUNS; i++)); do
   for r in "${ROUTES[@]}"; do
-    t=$(curl -s -o /dev/null -w '%{time_total}' "http://127.0.0.1:$PORT$r")
+    read -r code t < <(curl -s -o /dev/null -w '%{http_code} %{time_total}' "http://127.0.0.1:$PORT$r")
+    [ "$code" = 200 ] || { echo "GET $r answered $code" >&2; exit 1; }
     TIMES[$r]+="$t "
   done
 done
