@@ -69,12 +69,14 @@ log "per-step latency"
 {
   echo "## Per-step latency against the pipe floor"
   echo
-  echo "\`bash benches/step_latency.sh $STEP_RUNS\`: a 1000-step match of benches/trivial_bot.c, started"
-  echo "as a user starts it (no pinning by the caller), beside benches/pingpong.c (one short"
-  echo "line each way through pipes between two processes), taken in turn. \"Per step in the"
-  echo "match\" is the match's wall time less its first answer (the bot's start) over the other"
-  echo "999 steps; \"exchange\" is the answer time the referee measures (sense written to answer"
-  echo "read). Target: per step at most 2x the same-core floor."
+  echo "\`bash benches/step_latency.sh $STEP_RUNS\`: benches/trivial_bot.c in \`mazearena run\`, started as a"
+  echo "user starts it (no pinning by the caller), beside benches/pingpong.c (one short line each"
+  echo "way through pipes between two processes), taken in turn. The bot idles, then plays the"
+  echo "optimal path twice, so the match finishes: once after 85 steps, once after 985; \"per"
+  echo "step\" is the difference of the two whole runs (process start to exit) over the 900 more"
+  echo "steps, so the start, the sandbox and the tear-down fall out. \"Exchange\" is the answer"
+  echo "time the referee measures (sense written to answer read). Target: per step at most 2x"
+  echo "the same-core floor."
   echo
   bash benches/step_latency.sh "$STEP_RUNS"
   echo

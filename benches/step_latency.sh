@@ -3,18 +3,23 @@
 # same run, taken in turn RUNS times (medians):
 #   - floor: benches/pingpong.c, one short line each way through pipes, both processes
 #     on one core ("same") and on two ("split");
-#   - `mazearena run` of benches/trivial_bot.c (a 1000-step match), with and without the
-#     sandbox, started the way a user starts it (no pinning by the caller):
-#       whole run   = the process's wall time, start to exit, / 1000 steps;
-#       per step    = (the match's wall time - the first answer, which includes the
-#                     bot's start) / 999;
-#       exchange    = the mean answer time of steps 2-1000 as the referee measures it
-#                     (sense written to answer read).
+#   - `mazearena run` of benches/trivial_bot.c, with and without the sandbox, started the
+#     way a user starts it (no pinning by the caller). The bot idles for IDLE steps, then
+#     plays the maze's optimal path, resets and plays it again, so the match finishes:
+#     once with IDLE = 0 (85 steps) and once with IDLE = 900 (985 steps). Everything but
+#     the steps (the process's start and exit, the sandbox's set-up and tear-down, the
+#     bot's start) is the same in both, so
+#       per step = (whole run with 900 more steps - whole run) / 900,
+#     each whole run timed from the process's start to its exit; and
+#       exchange = the mean answer time the referee measures over the idle steps (sense
+#                  written to answer read), the rest of a step being the referee's own
+#                  work.
 #
 #   bash benches/step_latency.sh [RUNS]      (default 11; needs gcc and bubblewrap)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-11}
+IDLE=900
 cargo build --release --locked --quiet
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -22,46 +27,60 @@ mkdir "$tmp/bot"
 gcc -O2 -o "$tmp/bot/trivial_bot" benches/trivial_bot.c
 gcc -O2 -o "$tmp/pingpong" benches/pingpong.c
 maze=$PWD/mazes/gen-16-s1.txt
+# The optimal path, a reset, the path again: one answer a line.
+./target/release/mazearena maze solve "$maze" --json | python3 -c '
+import json, sys
+path = [json.dumps(a, separators=(",", ":")) for a in json.load(sys.stdin)["actions"]]
+print("\n".join(path + ["{\"reset\":true}"] + path))' >"$tmp/bot/script.txt"
 
-run_match() { # $1: sandbox; prints "whole_us per_step_us exchange_us"
+run_match() { # $1: sandbox, $2: idle steps; prints "whole_us exchange_us steps"
   local a b
   a=$(date +%s%N)
-  ./target/release/mazearena run --maze "$maze" --bot ./trivial_bot --bot-dir "$tmp/bot" \
-    --sandbox "$1" --replay "$tmp/r.json" --json >/dev/null 2>&1
+  ./target/release/mazearena run --maze "$maze" --bot "./trivial_bot script.txt $2" \
+    --bot-dir "$tmp/bot" --sandbox "$1" --replay "$tmp/r.json" --json >/dev/null 2>&1
   b=$(date +%s%N)
-  python3 - "$tmp/r.json" $(( (b - a) / 1000 )) <<'EOF'
+  python3 - "$tmp/r.json" $(( (b - a) / 1000 )) "$2" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
+idle = int(sys.argv[3])
 t = r["trace"]
-assert r["status"] == "step_limit" and len(t) == 1000, r["status"]
-whole = int(sys.argv[2]) / 1000
-per_step = (r["timings"]["wall_ms"] * 1000 - t[0]["answer_us"]) / 999
-exchange = sum(s["answer_us"] for s in t[1:]) / 999
-print(f"{whole:.1f} {per_step:.1f} {exchange:.1f}")
-EOF
+assert r["status"] == "finished", r["status"]
+exchange = sum(s["answer_us"] for s in t[1:idle]) / max(idle - 1, 1)
+print(f"{sys.argv[2]} {exchange:.1f} {len(t)}")
+PY
 }
 
 for _ in $(seq "$RUNS"); do
   echo "same $("$tmp/pingpong" same)"
   echo "split $("$tmp/pingpong" split)"
-  echo "none $(run_match none)"
-  echo "full $(run_match full)"
+  for s in none full; do
+    read -r short _ n0 < <(run_match "$s" 0)
+    read -r long exchange n1 < <(run_match "$s" "$IDLE")
+    [ $((n1 - n0)) = "$IDLE" ] || { echo "expected $IDLE more steps: $n0, $n1" >&2; exit 1; }
+    echo "$s $short $long $exchange"
+  done
 done >"$tmp/all.txt"
 
-python3 - "$tmp/all.txt" <<'EOF'
+python3 - "$tmp/all.txt" "$IDLE" <<'PY'
 import statistics, sys
 rows = {}
 for line in open(sys.argv[1]):
     k, *v = line.split()
     rows.setdefault(k, []).append([float(x) for x in v])
-med = lambda k, i=0: statistics.median(r[i] for r in rows[k])
-floor = med("same")
+idle = int(sys.argv[2])
+med = lambda k, f: statistics.median(f(r) for r in rows[k])
+floor = med("same", lambda r: r[0])
 n = len(rows["same"])
 print(f"| measure ({n} runs each, medians) | µs per step | × same-core floor |")
 print("|---|---:|---:|")
 print(f"| pipe round trip, one core (the floor) | {floor:.1f} | 1.0 |")
-print(f"| pipe round trip, two cores | {med('split'):.1f} | {med('split') / floor:.1f} |")
+split = med("split", lambda r: r[0])
+print(f"| pipe round trip, two cores | {split:.1f} | {split / floor:.1f} |")
 for k, name in (("none", "--sandbox none"), ("full", "--sandbox full")):
-    for i, what in ((0, "whole run / 1000"), (1, "per step in the match"), (2, "exchange (answer time)")):
-        print(f"| `mazearena run` {name}: {what} | {med(k, i):.1f} | {med(k, i) / floor:.1f} |")
-EOF
+    step = med(k, lambda r: (r[1] - r[0]) / idle)
+    exchange = med(k, lambda r: r[2])
+    short = med(k, lambda r: r[0]) / 1000
+    print(f"| `mazearena run` {name}: per step | {step:.1f} | {step / floor:.1f} |")
+    print(f"| `mazearena run` {name}: exchange (answer time) | {exchange:.1f} | {exchange / floor:.1f} |")
+    print(f"| `mazearena run` {name}: the 85-step match, whole run | {short:.1f} ms | |")
+PY

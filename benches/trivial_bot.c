@@ -1,15 +1,37 @@
-/* The cheapest possible protocol-v1 bot: answers every sense message with
- * {"rotation":0,"movement":0} and exits on the end message. Used to measure the
- * referee's own per-step overhead (the match always runs all 1000 steps). */
+/* The cheapest possible protocol-v1 bot, to measure the referee's own per-step cost.
+ *
+ *   trivial_bot                 answers every sense with {"rotation":0,"movement":0}
+ *                               (the match runs all 1000 steps);
+ *   trivial_bot SCRIPT IDLE     answers IDLE senses that way, then the lines of the file
+ *                               SCRIPT in turn (e.g. the optimal path, a reset, the path
+ *                               again: the match finishes), then idles again.
+ *
+ * It exits on the end message. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
-int main(void) {
-    char line[70000];
+int main(int argc, char **argv) {
+    static char line[70000];
+    static char script[4096][64];
+    int lines = 0, next = 0;
+    long idle = 0;
+    if (argc == 3) {
+        FILE *f = fopen(argv[1], "r");
+        if (!f) { perror(argv[1]); return 1; }
+        while (lines < 4096 && fgets(script[lines], sizeof script[0], f)) lines++;
+        fclose(f);
+        idle = atol(argv[2]);
+    }
     setvbuf(stdout, NULL, _IOLBF, 0);
     while (fgets(line, sizeof line, stdin)) {
         if (strstr(line, "\"type\":\"sense\"")) {
-            fputs("{\"rotation\":0,\"movement\":0}\n", stdout);
+            if (idle > 0 || next >= lines) {
+                idle--;
+                fputs("{\"rotation\":0,\"movement\":0}\n", stdout);
+            } else {
+                fputs(script[next++], stdout);
+            }
         } else if (strstr(line, "\"type\":\"end\"")) {
             break;
         }
