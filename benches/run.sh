@@ -6,8 +6,8 @@
 #   bash benches/run.sh --quick    (a few minutes: fewer runs, smaller databases and
 #                                   samples; to check the scripts, not for the figures)
 #
-# Needs gcc, python3, bubblewrap and wrk (the HTTP benchmark installs wrk with apt-get
-# if it is missing), and ../shared/mazes beside the checkout. Run it on a quiet machine:
+# Needs gcc, python3, bubblewrap and wrk (`apt-get install -y bubblewrap wrk`),
+# and ../shared/mazes beside the checkout. Run it on a quiet machine:
 # the figures are medians of runs taken in turn, but a busy core still shows.
 set -euo pipefail
 cd "$(dirname "$0")/.."
