@@ -31,7 +31,8 @@ ROUTES=(/healthz / "/api/leaderboard?scope=all" "/api/leaderboard?tournament=2" 
 declare -A TIMES
 for ((i = 0; i < RUNS; i++)); do
   for r in "${ROUTES[@]}"; do
-    read -r code t < <(curl -s -o /dev/null -w '%{http_code} %{time_total}' "http://127.0.0.1:$PORT$r")
+    answer=$(curl -s -o /dev/null -w '%{http_code} %{time_total}' "http://127.0.0.1:$PORT$r")
+    code=${answer% *} t=${answer#* }
     [ "$code" = 200 ] || { echo "GET $r answered $code" >&2; exit 1; }
     TIMES[$r]+="$t "
   done
