@@ -313,8 +313,9 @@ impl MatchRecord {
 }
 
 /// What a match row keeps of its record for lists and pages, besides its columns (seed,
-/// score, step counts) and its maze's (hash, side). Every field is optional: a match the server ended
-/// without playing it (aborted, or its build failed) has only a status and an error.
+/// score, step counts) and its maze's (hash, side). Every field is optional: a match the
+/// server ended without playing it (aborted, or its build failed) has only a status and
+/// an error.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct MatchSummary {
     /// The version of the referee that played it.

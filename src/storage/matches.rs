@@ -324,9 +324,9 @@ impl Storage {
         Ok(done.rows_affected() == 1)
     }
 
-    /// A played match's whole record with its trace, or its summary alone when the
-    /// server ended it without playing it; `None` while it is not played (or for no
-    /// such match).
+    /// A played match's whole record with its trace (an earlier version's record that
+    /// could not be converted: without it); `None` for a match not played (queued,
+    /// running, or ended by the server without playing it) or no such match.
     ///
     /// # Errors
     /// Database failures, or a stored record that cannot be read.
