@@ -120,7 +120,9 @@ log "bytes per stored match"
 {
   echo "## Bytes per stored match"
   echo
-  echo "\`bash benches/storage.sh $EVERY\`: a tournament of every shipped bot on every ${EVERY}th contest maze"
+  which="every contest maze"
+  [ "$EVERY" = 1 ] || which="every ${EVERY}th contest maze"
+  echo "\`bash benches/storage.sh $EVERY\`: a tournament of every shipped bot on $which"
   echo "of ../shared/mazes/micromouseonline/classic, then the database's bytes per match. Target:"
   echo "at most 4 KB a match. Release 0.1.0 stored 122,400 B a match here (record and trace as"
   echo "JSON in the match row; measured on a 30-maze sample)."
@@ -130,5 +132,6 @@ log "bytes per stored match"
 } >>"$out"
 
 mv "$out" BENCHMARKS.md
+chmod 644 BENCHMARKS.md
 trap - EXIT
 log "wrote BENCHMARKS.md"
