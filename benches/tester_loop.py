@@ -37,10 +37,13 @@ from __future__ import print_function
 import json
 import numbers
 import os
-import random
 import sys
 import time
 import traceback
+
+# The robot is loaded and seeded the way the adapter does it, so that both play it alike.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bots", "python"))
+from udacity_adapter import is_reset, load_robot_class, seed_randomness  # noqa: E402
 
 try:
     clock = time.perf_counter  # Python 3
@@ -121,35 +124,6 @@ def read_maze(path):
     return dim, cells
 
 
-def load_robot_class(path):
-    """Import the file at ``path`` (its folder first on sys.path); return its Robot."""
-    path = os.path.abspath(path)
-    folder = os.path.dirname(path)
-    name = os.path.splitext(os.path.basename(path))[0]
-    sys.path.insert(0, folder)
-    sys.dont_write_bytecode = True
-    try:
-        import importlib.util  # Python 3
-    except ImportError:
-        import imp  # Python 2.7
-        module = imp.load_source(name, path)
-    else:
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return module.Robot
-
-
-def seed_randomness(seed):
-    random.seed(seed)
-    try:
-        import numpy
-    except Exception:  # not installed (or broken): nothing to seed
-        return
-    numpy.random.seed(int(seed) % (2 ** 32))
-
-
 class ProtocolError(Exception):
     pass
 
@@ -168,13 +142,6 @@ def integer(value, what):
         if as_float is not None and as_float.is_integer():
             return int(as_float)
     raise ProtocolError("%s %r is not an integer" % (what, value))
-
-
-def is_reset(answer):
-    try:
-        return tuple(answer) == ("Reset", "Reset")
-    except TypeError:
-        return False
 
 
 def play(robot_class, dim, cells, trace):

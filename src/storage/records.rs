@@ -157,14 +157,18 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
     };
     let encode_err = |e: serde_json::Error| format!("cannot encode the match record: {e}");
     let compact = serde_json::to_vec(&stored).map_err(encode_err)?;
-    let whole = MatchRecord {
-        maze_layout: None,
-        ..record.clone()
-    };
-    let reads_back = complete(stored, summary(record), maze).is_ok_and(|back| back == whole);
+    // The read-back holds everything but the maze layout, which is kept apart.
+    let reads_back = complete(stored, summary(record), maze).is_ok_and(|mut back| {
+        back.maze_layout.clone_from(&record.maze_layout);
+        back == *record
+    });
     let (encoding, json) = if reads_back {
         (ENCODING_ANSWERS, compact)
     } else {
+        let whole = MatchRecord {
+            maze_layout: None,
+            ..record.clone()
+        };
         (
             ENCODING_JSON,
             serde_json::to_vec(&whole).map_err(encode_err)?,
