@@ -4,7 +4,11 @@
 # (1,012 matches: 506 distinct mazes, duplicates once), with `--jobs 1` and `--jobs 2`,
 # with and without the sandbox. The four settings are taken in turn RUNS times (medians
 # of the wall time, start to exit); the peak resident memory of the mazearena process
-# (VmHWM, read from /proc while it runs) is the largest of each setting's runs.
+# (VmHWM, read from /proc while it runs) is the largest of each setting's runs. The CPU
+# time of the process and its bots (user + system, read from /proc/PID/stat at the last
+# look before its exit) shows whether the same work cost more CPU in a run: on the
+# project's 2-core VM, some `--jobs 2` runs take 10-20% more CPU seconds than others for
+# the same matches (no steal time is reported), and take that much longer.
 #
 #   bash benches/tournament.sh [RUNS]      (default 3; about 2 minutes a round)
 set -euo pipefail
@@ -15,8 +19,8 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 (cd bots/rust && CARGO_TARGET_DIR="$PWD/target" cargo build --release --quiet)
 
-run() { # $1: jobs, $2: sandbox; prints "seconds peak_kib matches"
-  local db=$tmp/t-$1-$2.db a b pid peak=0 hwm
+run() { # $1: jobs, $2: sandbox; prints "ms peak_kib matches cpu_ticks"
+  local db=$tmp/t-$1-$2.db a b pid peak=0 hwm ticks=0 t
   rm -f "$db"*
   a=$(date +%s%N)
   ./target/release/mazearena tournament --bots bots/rust \
@@ -26,23 +30,27 @@ run() { # $1: jobs, $2: sandbox; prints "seconds peak_kib matches"
   while kill -0 "$pid" 2>/dev/null; do
     hwm=$(awk '/^VmHWM/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
     [ -n "$hwm" ] && [ "$hwm" -gt "$peak" ] && peak=$hwm
+    t=$(awk '{print $14 + $15 + $16 + $17}' "/proc/$pid/stat" 2>/dev/null || true)
+    [ -n "$t" ] && ticks=$t
     sleep 0.05
   done
   wait "$pid" || { cat "$tmp/err.log" >&2; exit 1; }
   b=$(date +%s%N)
   matches=$(python3 -c "import json,sys; print(len(json.load(open(sys.argv[1]))['matches']))" "$tmp/out.json")
-  echo "$(( (b - a) / 1000000 )) $peak $matches"
+  echo "$(( (b - a) / 1000000 )) $peak $matches $ticks"
 }
 
-declare -A WALL PEAK
+HZ=$(getconf CLK_TCK)
+declare -A WALL PEAK CPU
 SETTINGS=("1 none" "2 none" "1 full" "2 full")
 for ((i = 1; i <= RUNS; i++)); do
   for s in "${SETTINGS[@]}"; do
     # shellcheck disable=SC2086
-    read -r ms kib n < <(run $s)
-    echo "round $i: jobs ${s% *}, sandbox ${s#* }: ${ms} ms, peak ${kib} KiB, $n matches" >&2
+    read -r ms kib n ticks < <(run $s)
+    echo "round $i: jobs ${s% *}, sandbox ${s#* }: ${ms} ms, peak ${kib} KiB, $n matches, cpu $ticks ticks" >&2
     WALL[$s]+="$ms "
     PEAK[$s]+="$kib "
+    CPU[$s]+="$((ticks * 1000 / HZ)) "
     MATCHES=$n
   done
 done
@@ -51,24 +59,29 @@ echo "## Tournament throughput and memory"
 echo
 echo "\`bash benches/tournament.sh $RUNS\`: the two shipped Rust bots on every contest maze"
 echo "($MATCHES matches a tournament), the four settings taken in turn $RUNS times; medians"
-echo "of the whole command's wall time; peak resident memory (VmHWM) of the mazearena"
-echo "process, the largest of the runs."
+echo "of the whole command's wall time and of its CPU time (the process and its bots,"
+echo "user + system); peak resident memory (VmHWM) of the mazearena process, the largest of"
+echo "the runs. Each run's figures are in the log of \`benches/run.sh\`."
 echo
 python3 - "$MATCHES" "${WALL[1 none]}" "${WALL[2 none]}" "${WALL[1 full]}" "${WALL[2 full]}" \
-  "${PEAK[1 none]}" "${PEAK[2 none]}" "${PEAK[1 full]}" "${PEAK[2 full]}" <<'PY'
+  "${PEAK[1 none]}" "${PEAK[2 none]}" "${PEAK[1 full]}" "${PEAK[2 full]}" \
+  "${CPU[1 none]}" "${CPU[2 none]}" "${CPU[1 full]}" "${CPU[2 full]}" <<'PY'
 import statistics, sys
 n = int(sys.argv[1])
 walls = [statistics.median(map(int, a.split())) for a in sys.argv[2:6]]
 peaks = [max(map(int, a.split())) for a in sys.argv[6:10]]
+cpus = [statistics.median(map(int, a.split())) for a in sys.argv[10:14]]
 names = ["--jobs 1, --sandbox none", "--jobs 2, --sandbox none",
          "--jobs 1, --sandbox full", "--jobs 2, --sandbox full"]
-print("| setting | wall | matches per minute | peak memory |")
-print("|---|---:|---:|---:|")
-for name, w, p in zip(names, walls, peaks):
-    print(f"| {name} | {w / 1000:.1f} s | {n * 60000 / w:.0f} | {p / 1024:.1f} MiB |")
+print("| setting | wall | matches per minute | CPU time | peak memory |")
+print("|---|---:|---:|---:|---:|")
+for name, w, c, p in zip(names, walls, cpus, peaks):
+    print(f"| {name} | {w / 1000:.1f} s | {n * 60000 / w:.0f} | {c / 1000:.1f} s | {p / 1024:.1f} MiB |")
 print()
 print(f"Scaling `--jobs 2` / `--jobs 1`: {walls[0] / walls[1]:.2f}x without the sandbox, "
       f"{walls[2] / walls[3]:.2f}x with it (target: at least 1.9x). The sandbox costs "
       f"{(walls[3] / walls[1] - 1) * 100:.0f}% of the wall time with two jobs "
-      f"({(walls[3] - walls[1]) * 2 / n:.1f} ms of a core per match).")
+      f"({(walls[3] - walls[1]) * 2 / n:.1f} ms of a core per match). The same matches took "
+      f"{(cpus[1] / cpus[0] - 1) * 100:+.0f}% (none) and {(cpus[3] / cpus[2] - 1) * 100:+.0f}% "
+      f"(full) CPU time at `--jobs 2` against `--jobs 1`.")
 PY

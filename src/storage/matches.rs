@@ -235,6 +235,7 @@ impl Storage {
         lease_ms: i64,
         tournament: Option<i64>,
     ) -> Result<Option<ClaimedMatch>> {
+        let turn = self.write_turn().await;
         let now = now_ms();
         let id: Option<i64> = sqlx::query_scalar(
             "update match set status = 'running', lease_owner = ?, lease_expires_at = ?,
@@ -255,6 +256,7 @@ impl Storage {
         .bind(tournament)
         .fetch_optional(self.pool())
         .await?;
+        drop(turn);
         let Some(id) = id else { return Ok(None) };
         Ok(sqlx::query_as(
             "select m.match_id, m.seed, v.command, v.dir, z.layout, m.tournament_id, v.env
@@ -271,6 +273,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn renew_lease(&self, match_id: i64, owner: &str, lease_ms: i64) -> Result<bool> {
+        let _turn = self.write_turn().await;
         let done = sqlx::query(
             "update match set lease_expires_at = ?
              where match_id = ? and lease_owner = ? and status = 'running'",
@@ -300,6 +303,7 @@ impl Storage {
         maze: &Maze,
     ) -> Result<bool> {
         let stored = StoredRecord::encode(match_id, record, maze)?;
+        let _turn = self.write_turn().await;
         let mut tx = self.pool().begin().await?;
         let done = sqlx::query(
             "update match set status = ?, score = ?, run0_steps = ?, run1_steps = ?, total_steps = ?,
@@ -430,6 +434,7 @@ impl Storage {
     /// Database failures.
     pub async fn fail_match(&self, match_id: i64, owner: &str, reason: &str) -> Result<bool> {
         let record = failure_record(MatchStatus::Crashed, reason)?;
+        let _turn = self.write_turn().await;
         let done = sqlx::query(
             "update match set status = 'crashed', record = ?, finished_at = ?,
                  lease_owner = null, lease_expires_at = null
@@ -451,6 +456,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn release_match(&self, match_id: i64, owner: &str) -> Result<bool> {
+        let _turn = self.write_turn().await;
         let done = sqlx::query(
             "update match set status = 'queued', lease_owner = null, lease_expires_at = null
              where match_id = ? and lease_owner = ? and status = 'running'",

@@ -68,6 +68,11 @@ pub type Result<T, E = StorageError> = std::result::Result<T, E>;
 #[derive(Debug, Clone)]
 pub struct Storage {
     pool: SqlitePool,
+    /// SQLite lets one connection write at a time, and a writer that finds the database
+    /// busy sleeps (1, 2, 5 ms and on) before it tries again. The match workers' writes
+    /// (claims, leases, records) queue here instead, so no worker sleeps on the
+    /// database while its core idles.
+    writes: std::sync::Arc<tokio::sync::Mutex<()>>,
 }
 
 impl Storage {
@@ -94,7 +99,10 @@ impl Storage {
             .connect_with(options)
             .await?;
         sqlx::migrate!().run(&pool).await?;
-        let storage = Storage { pool };
+        let storage = Storage {
+            pool,
+            writes: std::sync::Arc::default(),
+        };
         storage.convert_inline_records().await?;
         Ok(storage)
     }
@@ -102,6 +110,12 @@ impl Storage {
     /// The connection pool (for the submodules).
     pub(crate) fn pool(&self) -> &SqlitePool {
         &self.pool
+    }
+
+    /// Waits for this process's turn to write (see [`Storage::writes`]); the turn lasts
+    /// as long as the guard.
+    pub(crate) async fn write_turn(&self) -> tokio::sync::MutexGuard<'_, ()> {
+        self.writes.lock().await
     }
 
     /// Checks that the database answers.

@@ -9,13 +9,16 @@
 //! else (sensors, events, positions, headings, warnings) is replayed by the referee on
 //! the maze when the record is read: the rules are a pure function of the answers. An
 //! encoding is only used when reading it back gives the very same record (checked when
-//! it is written); otherwise the whole record is kept as JSON ([`ENCODING_JSON`]).
+//! it is written, by replaying the answers); otherwise the whole record is kept as JSON
+//! ([`ENCODING_JSON`]).
 
+use std::borrow::Cow;
+use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{Action, Game, GameConfig, Maze};
+use crate::engine::{Action, Game, GameConfig, Maze, StepReport};
 use crate::runner::outcome::{MatchSummary, Notice};
 use crate::runner::{MatchRecord, TraceStep};
 
@@ -31,9 +34,10 @@ pub const ENCODING_ANSWERS: i64 = 3;
 /// The zstd level: about 3 KB for a match of a few hundred steps, a few ms to write.
 const LEVEL: i32 = 9;
 
-/// The part of each step the referee cannot replay, by column.
+/// The part of each step the referee cannot replay, by column. It borrows from the
+/// record when written and owns its parts when read.
 #[derive(Debug, Default, Serialize, Deserialize)]
-struct Answers {
+struct Answers<'a> {
     /// Each answer as a small number (see [`action_code`]); 255: in `other_actions`.
     actions: Vec<u8>,
     /// The answers outside the rules (played leniently), by index in the trace.
@@ -47,14 +51,14 @@ struct Answers {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     cpu_lag_us: Vec<Option<i64>>,
     /// By index in the trace, the steps that have any.
-    stderr: BTreeMap<usize, Vec<String>>,
-    debug: BTreeMap<usize, serde_json::Value>,
+    stderr: BTreeMap<usize, Cow<'a, [String]>>,
+    debug: BTreeMap<usize, Cow<'a, serde_json::Value>>,
 }
 
 /// What the compact encoding stores besides the row's summary and columns. (The
 /// fields before `stderr_tail` are absent from [`ENCODING_ANSWERS_WHOLE_ROW`].)
 #[derive(Debug, Serialize, Deserialize)]
-struct Stored {
+struct Stored<'a> {
     #[serde(default)]
     protocol: u32,
     #[serde(default)]
@@ -71,9 +75,9 @@ struct Stored {
     bot_pid: Option<u32>,
     #[serde(default)]
     core: Option<usize>,
-    stderr_tail: String,
-    notices: Vec<Notice>,
-    steps: Answers,
+    stderr_tail: Cow<'a, str>,
+    notices: Cow<'a, [Notice]>,
+    steps: Answers<'a>,
 }
 
 /// An answer within the rules as a number: 0-20 for a rotation of -90, 0 or 90 and a
@@ -136,10 +140,10 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
             .cpu_lag_us
             .push(s.cpu_us.map(|cpu| s.answer_us as i64 - cpu as i64));
         if !s.stderr.is_empty() {
-            steps.stderr.insert(i, s.stderr.clone());
+            steps.stderr.insert(i, Cow::Borrowed(&s.stderr));
         }
         if let Some(d) = &s.debug {
-            steps.debug.insert(i, d.clone());
+            steps.debug.insert(i, Cow::Borrowed(d));
         }
     }
     let stored = Stored {
@@ -151,19 +155,16 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
         total_steps: record.total_steps,
         bot_pid: record.bot_pid,
         core: record.core,
-        stderr_tail: record.stderr_tail.clone(),
-        notices: record.notices.clone(),
+        stderr_tail: Cow::Borrowed(&record.stderr_tail),
+        notices: Cow::Borrowed(&record.notices),
         steps,
     };
     let encode_err = |e: serde_json::Error| format!("cannot encode the match record: {e}");
-    let compact = serde_json::to_vec(&stored).map_err(encode_err)?;
-    // The read-back holds everything but the maze layout, which is kept apart.
-    let reads_back = complete(stored, summary(record), maze).is_ok_and(|mut back| {
-        back.maze_layout.clone_from(&record.maze_layout);
-        back == *record
-    });
-    let (encoding, json) = if reads_back {
-        (ENCODING_ANSWERS, compact)
+    let (encoding, json) = if replays_the_same(&stored.steps, record, maze) {
+        (
+            ENCODING_ANSWERS,
+            serde_json::to_vec(&stored).map_err(encode_err)?,
+        )
     } else {
         let whole = MatchRecord {
             maze_layout: None,
@@ -174,9 +175,39 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
             serde_json::to_vec(&whole).map_err(encode_err)?,
         )
     };
-    let data = zstd::bulk::compress(&json, LEVEL)
-        .map_err(|e| format!("cannot compress the match record: {e}"))?;
+    let data = compress(&json).map_err(|e| format!("cannot compress the match record: {e}"))?;
     Ok((encoding, data))
+}
+
+/// Whether reading `steps` back on `maze` gives `record`'s trace and maze. The rest of
+/// the compact encoding is `record`'s own fields (and the row's [`summary`]) as they
+/// are, so this is the part of the read-back that can differ: the replayed steps.
+fn replays_the_same(steps: &Answers, record: &MatchRecord, maze: &Maze) -> bool {
+    record.maze_hash == maze.hash()
+        && record.maze_dim == maze.dim()
+        && steps.actions.len() == record.trace.len()
+        && replay_reports(steps, maze, record.limits.max_steps, |i, report| {
+            (report == record.trace[i].report)
+                .then_some(())
+                .ok_or_else(|| format!("step {} replays otherwise", i + 1))
+        })
+        .is_ok()
+}
+
+/// `json` compressed at [`LEVEL`] with a compression context kept by the thread (a
+/// fresh context costs about as much as compressing a record).
+fn compress(json: &[u8]) -> std::io::Result<Vec<u8>> {
+    thread_local! {
+        static COMPRESSOR: RefCell<Option<zstd::bulk::Compressor<'static>>> =
+            const { RefCell::new(None) };
+    }
+    COMPRESSOR.with_borrow_mut(|slot| {
+        let compressor = match slot {
+            Some(c) => c,
+            None => slot.insert(zstd::bulk::Compressor::new(LEVEL)?),
+        };
+        compressor.compress(json)
+    })
 }
 
 /// Decodes a stored record of a match on `maze`, whose row keeps `row_summary` (JSON).
@@ -204,10 +235,10 @@ pub fn decode(
         ENCODING_ANSWERS_WHOLE_ROW => {
             let stored: Stored = serde_json::from_slice(&json).map_err(invalid)?;
             let head: MatchRecord = serde_json::from_str(row_summary).map_err(invalid_row)?;
-            let trace = replay(&stored.steps, maze, head.limits.max_steps)?;
+            let trace = replay(stored.steps, maze, head.limits.max_steps)?;
             Ok(MatchRecord {
-                stderr_tail: stored.stderr_tail,
-                notices: stored.notices,
+                stderr_tail: stored.stderr_tail.into_owned(),
+                notices: stored.notices.into_owned(),
                 trace,
                 ..head
             })
@@ -220,7 +251,7 @@ pub fn decode(
 fn complete(stored: Stored, summary: MatchSummary, maze: &Maze) -> Result<MatchRecord, String> {
     let missing = |what: &str| format!("the match's summary has no {what}");
     let limits = summary.limits.ok_or_else(|| missing("limits"))?;
-    let trace = replay(&stored.steps, maze, limits.max_steps)?;
+    let trace = replay(stored.steps, maze, limits.max_steps)?;
     Ok(MatchRecord {
         engine_version: summary
             .engine_version
@@ -237,21 +268,59 @@ fn complete(stored: Stored, summary: MatchSummary, maze: &Maze) -> Result<MatchR
         total_steps: stored.total_steps,
         warnings: summary.warnings,
         error: summary.error,
-        stderr_tail: stored.stderr_tail,
+        stderr_tail: stored.stderr_tail.into_owned(),
         timings: summary.timings.ok_or_else(|| missing("timings"))?,
         bot_pid: stored.bot_pid,
         core: stored.core,
-        notices: stored.notices,
+        notices: stored.notices.into_owned(),
         maze_layout: None,
         trace,
     })
 }
 
 /// Plays the stored answers again on `maze`.
-fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>, String> {
+fn replay(steps: Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>, String> {
+    let mut reports = Vec::with_capacity(steps.actions.len());
+    replay_reports(&steps, maze, max_steps, |_, report| {
+        reports.push(report);
+        Ok(())
+    })?;
+    let Answers {
+        answer_us,
+        cpu_us,
+        cpu_lag_us,
+        mut stderr,
+        mut debug,
+        ..
+    } = steps;
+    let by_lag = cpu_us.is_empty();
+    Ok(reports
+        .into_iter()
+        .enumerate()
+        .map(|(i, report)| TraceStep {
+            report,
+            answer_us: answer_us[i],
+            cpu_us: if by_lag {
+                cpu_lag_us[i].map(|lag| (answer_us[i] as i64 - lag) as u64)
+            } else {
+                cpu_us[i]
+            },
+            stderr: stderr.remove(&i).map(Cow::into_owned).unwrap_or_default(),
+            debug: debug.remove(&i).map(Cow::into_owned),
+        })
+        .collect())
+}
+
+/// Plays the stored answers again on `maze`, handing each step's report to `each`
+/// (with its index), after checking that the columns agree in length.
+fn replay_reports(
+    steps: &Answers,
+    maze: &Maze,
+    max_steps: u32,
+    mut each: impl FnMut(usize, StepReport) -> Result<(), String>,
+) -> Result<(), String> {
     let n = steps.actions.len();
-    let by_lag = steps.cpu_us.is_empty();
-    let cpu_len = if by_lag {
+    let cpu_len = if steps.cpu_us.is_empty() {
         steps.cpu_lag_us.len()
     } else {
         steps.cpu_us.len()
@@ -260,7 +329,6 @@ fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>
         return Err("the stored steps' columns differ in length".into());
     }
     let mut game = Game::new(maze.clone(), GameConfig { max_steps });
-    let mut trace = Vec::with_capacity(n);
     for i in 0..n {
         if game.begin_step().is_none() {
             return Err(format!(
@@ -273,19 +341,9 @@ fn replay(steps: &Answers, maze: &Maze, max_steps: u32) -> Result<Vec<TraceStep>
             None => code_action(steps.actions[i])
                 .ok_or_else(|| format!("step {}: no such stored answer", i + 1))?,
         };
-        trace.push(TraceStep {
-            report: game.apply(action),
-            answer_us: steps.answer_us[i],
-            cpu_us: if by_lag {
-                steps.cpu_lag_us[i].map(|lag| (steps.answer_us[i] as i64 - lag) as u64)
-            } else {
-                steps.cpu_us[i]
-            },
-            stderr: steps.stderr.get(&i).cloned().unwrap_or_default(),
-            debug: steps.debug.get(&i).cloned(),
-        });
+        each(i, game.apply(action))?;
     }
-    Ok(trace)
+    Ok(())
 }
 
 #[cfg(test)]
