@@ -1,5 +1,6 @@
-//! Prometheus metrics: matches by status and queue depth (read from the database at
-//! scrape time, so they survive restarts) and a histogram of match durations.
+//! Prometheus metrics: matches by status, queue depth and the live workers on every
+//! machine (read from the database at scrape time, so they survive restarts and agree
+//! across servers) and a histogram of this process's match durations.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -18,6 +19,14 @@ struct StatusLabel {
     status: String,
 }
 
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct WorkerLabel {
+    worker: String,
+    role: String,
+    host: String,
+    sandbox: String,
+}
+
 /// The server's metrics; cheap to clone.
 #[derive(Debug, Clone)]
 pub struct Metrics {
@@ -29,6 +38,8 @@ struct Inner {
     registry: Registry,
     matches: Family<StatusLabel, Gauge>,
     queue_depth: Gauge,
+    worker_jobs: Family<WorkerLabel, Gauge>,
+    worker_matches: Family<WorkerLabel, Gauge>,
     duration: Histogram,
 }
 
@@ -54,6 +65,18 @@ impl Metrics {
             "Matches waiting to be played",
             queue_depth.clone(),
         );
+        let worker_jobs = Family::<WorkerLabel, Gauge>::default();
+        registry.register(
+            "worker_jobs",
+            "Matches each live worker plays at once (workers seen in the last 30 s)",
+            worker_jobs.clone(),
+        );
+        let worker_matches = Family::<WorkerLabel, Gauge>::default();
+        registry.register(
+            "worker_matches_done",
+            "Matches each live worker has recorded since it started",
+            worker_matches.clone(),
+        );
         // 0.05 s .. ~100 s
         let duration = Histogram::new(exponential_buckets(0.05, 2.0, 12));
         registry.register(
@@ -66,6 +89,8 @@ impl Metrics {
                 registry,
                 matches,
                 queue_depth,
+                worker_jobs,
+                worker_matches,
                 duration,
             }),
         }
@@ -97,6 +122,24 @@ impl Metrics {
             if state == MatchState::Queued {
                 self.inner.queue_depth.set(n);
             }
+        }
+        let workers = storage
+            .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
+            .await?;
+        self.inner.worker_jobs.clear();
+        self.inner.worker_matches.clear();
+        for w in workers {
+            let label = WorkerLabel {
+                worker: w.worker_id,
+                role: w.role,
+                host: w.host,
+                sandbox: w.sandbox,
+            };
+            self.inner.worker_jobs.get_or_create(&label).set(w.jobs);
+            self.inner
+                .worker_matches
+                .get_or_create(&label)
+                .set(w.matches_done);
         }
         let mut out = String::new();
         // Writing into a String cannot fail.

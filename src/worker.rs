@@ -10,6 +10,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::{Duration, Instant};
 
 use tokio::sync::Notify;
@@ -21,6 +22,7 @@ use crate::metrics::Metrics;
 use crate::runner::{self, BotSpec, Limits, MatchStatus};
 use crate::storage::Storage;
 use crate::storage::matches::ClaimedMatch;
+use crate::storage::workers::NewWorker;
 
 /// Default lease on a running match; renewed every third of it.
 pub const DEFAULT_LEASE: Duration = Duration::from_secs(30);
@@ -49,7 +51,19 @@ pub struct WorkerConfig {
     pub only_tournament: Option<i64>,
     /// Stop when the queue is empty instead of waiting for more.
     pub exit_when_idle: bool,
+    /// Report the workers in the database's worker table under this role (`serve` or
+    /// `worker`), so that every server shows them; `None`: not reported (a local
+    /// tournament).
+    pub report_as: Option<&'static str>,
 }
+
+/// How often a reported worker refreshes its row (and looks for expired leases).
+pub fn report_interval(lease: Duration) -> Duration {
+    (lease / 2).clamp(Duration::from_millis(200), Duration::from_secs(5))
+}
+
+/// A worker not seen for this long is no longer shown as live.
+pub const LIVE_WINDOW: Duration = Duration::from_secs(30);
 
 /// Signals that stop the workers.
 #[derive(Debug, Clone, Default)]
@@ -78,8 +92,9 @@ pub fn spawn_workers(
     wake: Arc<Notify>,
     shutdown: Shutdown,
     on_done: Option<Arc<dyn Fn(MatchStatus) + Send + Sync>>,
-) {
+) -> PoolHandle {
     let owner: Arc<str> = lease_owner_name().into();
+    let done_count = Arc::new(AtomicI64::new(0));
     let cores = runner::affinity::allowed_cores();
     for k in 0..config.jobs.max(1) {
         let worker = Worker {
@@ -90,6 +105,7 @@ pub fn spawn_workers(
             shutdown: shutdown.clone(),
             owner: owner.clone(),
             on_done: on_done.clone(),
+            done_count: done_count.clone(),
         };
         let core = (!cores.is_empty()).then(|| cores[k % cores.len()]);
         let (done, finished) = tokio::sync::oneshot::channel::<()>();
@@ -109,34 +125,119 @@ pub fn spawn_workers(
             Err(e) => tracing::error!(cause = %e, "could not start a match worker's thread"),
         }
     }
-    let reaper_storage = storage;
+    let handle = PoolHandle {
+        owner: owner.clone(),
+        done_count: done_count.clone(),
+        reported: config.report_as.is_some(),
+    };
+    let reporter = Reporter {
+        storage,
+        owner,
+        done_count,
+        role: config.report_as,
+        jobs: config.jobs.max(1),
+        sandbox: config.sandbox.level(),
+    };
     let lease = config.lease;
     let stop = shutdown.stop_claiming.clone();
     tracker.spawn(async move {
-        let mut tick = tokio::time::interval((lease / 2).max(Duration::from_millis(200)));
+        reporter.register().await;
+        let mut tick = tokio::time::interval(report_interval(lease));
         loop {
             tokio::select! {
                 _ = stop.cancelled() => break,
                 _ = tick.tick() => {}
             }
-            match reaper_storage.reap_expired().await {
-                Ok(r) if r.requeued.is_empty() && r.aborted.is_empty() => {}
-                Ok(r) => {
-                    if !r.requeued.is_empty() {
-                        tracing::warn!(matches = ?r.requeued, "re-queued matches whose worker stopped");
-                    }
-                    if !r.aborted.is_empty() {
-                        tracing::warn!(matches = ?r.aborted, "aborted matches that were running each time the server stopped");
-                    }
-                    if !r.paused_bots.is_empty() {
-                        tracing::warn!(bots = ?r.paused_bots, "paused bots whose matches keep aborting");
-                    }
-                    wake.notify_waiters();
-                }
-                Err(e) => tracing::error!(cause = %e, "could not re-queue expired leases"),
+            reporter.seen().await;
+            if reap(&reporter.storage).await {
+                wake.notify_waiters();
             }
         }
     });
+    handle
+}
+
+/// What a started pool leaves its caller: its name in the worker table and its count.
+#[derive(Debug, Clone)]
+pub struct PoolHandle {
+    owner: Arc<str>,
+    done_count: Arc<AtomicI64>,
+    reported: bool,
+}
+
+/// Re-queues (or aborts) the matches whose lease expired; whether there were any.
+async fn reap(storage: &Storage) -> bool {
+    match storage.reap_expired().await {
+        Ok(r) if r.requeued.is_empty() && r.aborted.is_empty() => false,
+        Ok(r) => {
+            if !r.requeued.is_empty() {
+                tracing::warn!(matches = ?r.requeued, "re-queued matches whose worker stopped");
+            }
+            if !r.aborted.is_empty() {
+                tracing::warn!(matches = ?r.aborted, "aborted matches that were running each time their worker stopped");
+            }
+            if !r.paused_bots.is_empty() {
+                tracing::warn!(bots = ?r.paused_bots, "paused bots whose matches keep aborting");
+            }
+            true
+        }
+        Err(e) => {
+            tracing::error!(cause = %e, "could not re-queue expired leases");
+            false
+        }
+    }
+}
+
+/// The pool's row in the worker table (when it reports itself).
+struct Reporter {
+    storage: Storage,
+    owner: Arc<str>,
+    done_count: Arc<AtomicI64>,
+    role: Option<&'static str>,
+    jobs: usize,
+    sandbox: &'static str,
+}
+
+impl Reporter {
+    async fn register(&self) {
+        let Some(role) = self.role else { return };
+        let host = nix::unistd::gethostname()
+            .map(|h| h.to_string_lossy().into_owned())
+            .unwrap_or_else(|_| "unknown".into());
+        let row = NewWorker {
+            worker_id: &self.owner,
+            role,
+            host: &host,
+            pid: i64::from(std::process::id()),
+            jobs: self.jobs as i64,
+            sandbox: self.sandbox,
+        };
+        if let Err(e) = self.storage.register_worker(&row).await {
+            tracing::error!(cause = %e, "could not report this worker in the database");
+        }
+    }
+
+    async fn seen(&self) {
+        if self.role.is_some()
+            && let Err(e) = self
+                .storage
+                .worker_seen(&self.owner, self.done_count.load(Ordering::Relaxed))
+                .await
+        {
+            tracing::error!(cause = %e, "could not report this worker in the database");
+        }
+    }
+}
+
+/// Records in the worker table that `pool` stopped (after its tasks ended).
+pub async fn report_stopped(storage: &Storage, pool: &PoolHandle) {
+    if pool.reported
+        && let Err(e) = storage
+            .worker_stopped(&pool.owner, pool.done_count.load(Ordering::Relaxed))
+            .await
+    {
+        tracing::error!(cause = %e, "could not report this worker's stop in the database");
+    }
 }
 
 struct Worker {
@@ -147,6 +248,7 @@ struct Worker {
     shutdown: Shutdown,
     owner: Arc<str>,
     on_done: Option<Arc<dyn Fn(MatchStatus) + Send + Sync>>,
+    done_count: Arc<AtomicI64>,
 }
 
 impl Worker {
@@ -231,6 +333,7 @@ impl Worker {
                 record = &mut game => {
                     match self.storage.complete_match(job.match_id, &self.owner, &record, &maze).await {
                         Ok(true) => {
+                            self.done_count.fetch_add(1, Ordering::Relaxed);
                             if let Some(m) = &self.metrics {
                                 m.observe_match(started.elapsed());
                             }

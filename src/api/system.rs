@@ -12,6 +12,7 @@ use utoipa_axum::routes;
 
 use super::AppState;
 use super::error::{ApiError, ApiResult};
+use crate::storage::workers::WorkerRow;
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
@@ -30,6 +31,9 @@ pub struct Health {
     /// How bots are isolated: `full` (the sandbox) or `none` (started with
     /// `--sandbox none`: only for bots the operator trusts).
     pub sandbox: &'static str,
+    /// The processes playing matches (this server's pool and `mazearena worker`s, on any
+    /// machine) that reported within the last 30 seconds.
+    pub workers: Vec<WorkerRow>,
 }
 
 /// Liveness and database check.
@@ -38,10 +42,15 @@ pub struct Health {
 async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>> {
     state.storage.ping().await?;
     let queued = state.storage.queued_count().await?;
+    let workers = state
+        .storage
+        .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
+        .await?;
     Ok(axum::Json(Health {
         status: "ok",
         queued,
         sandbox: state.settings.sandbox_level,
+        workers,
     }))
 }
 

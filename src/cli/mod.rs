@@ -9,6 +9,7 @@ mod run;
 mod sandbox;
 mod serve;
 mod tournament;
+mod worker;
 
 use std::path::Path;
 
@@ -34,8 +35,10 @@ pub enum Command {
     /// Maze tools: validate, solve, convert, render, generate.
     #[command(subcommand)]
     Maze(maze::MazeCommand),
-    /// Run the match server: HTTP API, SQLite storage, match workers.
+    /// Run the match server: HTTP API, storage (SQLite or PostgreSQL), match workers.
     Serve(serve::ServeArgs),
+    /// Only play matches, from the database the servers use (scale-out on PostgreSQL).
+    Worker(worker::WorkerArgs),
     /// Run a tournament locally (no server): every bot on every maze, into the database.
     Tournament(tournament::TournamentArgs),
     /// Show each isolation mechanism of the sandbox and whether it works here.
@@ -68,6 +71,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Run(args) => run::run(args),
         Command::Maze(cmd) => maze::run(cmd),
         Command::Serve(args) => serve::run(args),
+        Command::Worker(args) => worker::run(args),
         Command::Tournament(args) => tournament::run(args),
         Command::Doctor(args) => sandbox::doctor(args),
         Command::Replay(args) => replay::run(args),

@@ -35,7 +35,8 @@ pub struct ServeArgs {
     /// Address to listen on (port 0: any free port; the chosen address is printed).
     #[arg(long, env = "MAZEARENA_BIND", default_value = "127.0.0.1:8080")]
     bind: String,
-    /// The SQLite database, created on first start.
+    /// The database: `sqlite://FILE` (created on first start) or
+    /// `postgres://USER:PASSWORD@HOST/DB` (several servers and workers on one database).
     #[arg(
         long,
         env = "MAZEARENA_DATABASE",
@@ -45,7 +46,8 @@ pub struct ServeArgs {
     /// Where uploaded bots' files are kept.
     #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
     data_dir: PathBuf,
-    /// Match workers, at most one per core (default: the number of cores).
+    /// Match workers, at most one per core (default: the number of cores); 0 serves the
+    /// API only, leaving the matches to `mazearena worker` processes.
     #[arg(long, env = "MAZEARENA_JOBS")]
     jobs: Option<usize>,
     /// The admin token (uploading mazes, tournaments). If unset, one is generated and
@@ -87,14 +89,9 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .data_dir
         .canonicalize()
         .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
-    let mut hide = vec![data_dir.clone()];
-    if let Some(file) = args.database.strip_prefix("sqlite://") {
-        let file = file.split('?').next().unwrap_or(file);
-        hide.push(std::path::absolute(file).unwrap_or_else(|_| file.into()));
-    }
     let sandbox = args
         .sandbox
-        .open(&hide)
+        .open(&hidden_paths(&data_dir, &args.database))
         .context("refusing to serve without the sandbox")?;
     let storage = Storage::open(&args.database)
         .await
@@ -116,14 +113,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             t
         }
     };
-    let cores = worker::cores();
-    let jobs = args.jobs.unwrap_or(cores).clamp(1, cores);
-    if args.jobs.is_some_and(|j| j > cores) {
-        eprintln!(
-            "--jobs {} lowered to {cores}: one bot process per core keeps timing fair",
-            args.jobs.unwrap_or(0)
-        );
-    }
+    let jobs = jobs_on_this_machine(args.jobs, 0);
     let metrics = Metrics::new();
     let wake = Arc::new(Notify::new());
     let state = AppState {
@@ -157,22 +147,25 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         wake.clone(),
         shutdown.stop_claiming.clone(),
     ));
-    worker::spawn_workers(
-        &tracker,
-        storage.clone(),
-        WorkerConfig {
-            jobs,
-            lease: Duration::from_secs(args.lease_secs.max(1)),
-            limits: Limits::default(),
-            sandbox,
-            only_tournament: None,
-            exit_when_idle: false,
-        },
-        Some(metrics),
-        wake,
-        shutdown.clone(),
-        None,
-    );
+    let pool = (jobs > 0).then(|| {
+        worker::spawn_workers(
+            &tracker,
+            storage.clone(),
+            WorkerConfig {
+                jobs,
+                lease: Duration::from_secs(args.lease_secs.max(1)),
+                limits: Limits::default(),
+                sandbox,
+                only_tournament: None,
+                exit_when_idle: false,
+                report_as: Some("serve"),
+            },
+            Some(metrics),
+            wake,
+            shutdown.clone(),
+            None,
+        )
+    });
     tracker.close();
 
     let stop = shutdown.stop_claiming.clone();
@@ -186,15 +179,60 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .await
         .context("the HTTP server failed")?;
 
-    let grace = Duration::from_secs(args.shutdown_grace_secs);
+    finish(
+        &storage,
+        &tracker,
+        &shutdown,
+        pool.as_ref(),
+        Duration::from_secs(args.shutdown_grace_secs),
+    )
+    .await;
+    eprintln!("mazearena stopped");
+    Ok(())
+}
+
+/// The paths a bot must never see: the data directory, and the database file if it is
+/// SQLite.
+pub(super) fn hidden_paths(data_dir: &std::path::Path, database: &str) -> Vec<PathBuf> {
+    let mut hide = vec![data_dir.to_path_buf()];
+    if let Some(file) = database.strip_prefix("sqlite://") {
+        let file = file.split('?').next().unwrap_or(file);
+        hide.push(std::path::absolute(file).unwrap_or_else(|_| file.into()));
+    }
+    hide
+}
+
+/// The match workers to run: `asked` (default: the number of cores), at least `least`,
+/// at most one per core (said on stderr when lowered).
+pub(super) fn jobs_on_this_machine(asked: Option<usize>, least: usize) -> usize {
+    let cores = worker::cores();
+    if asked.is_some_and(|j| j > cores) {
+        eprintln!(
+            "--jobs {} lowered to {cores}: one bot process per core keeps timing fair",
+            asked.unwrap_or(0)
+        );
+    }
+    asked.unwrap_or(cores).clamp(least, cores)
+}
+
+/// After a stop signal: gives the running matches `grace` to end, then stops and
+/// re-queues the rest, reports the pool stopped and closes the database.
+pub(super) async fn finish(
+    storage: &Storage,
+    tracker: &TaskTracker,
+    shutdown: &Shutdown,
+    pool: Option<&worker::PoolHandle>,
+    grace: Duration,
+) {
     if tokio::time::timeout(grace, tracker.wait()).await.is_err() {
         tracing::warn!("running matches did not finish in time: stopping them and re-queueing");
         shutdown.abort.cancel();
         tracker.wait().await;
     }
+    if let Some(pool) = pool {
+        worker::report_stopped(storage, pool).await;
+    }
     storage.close().await;
-    eprintln!("mazearena stopped");
-    Ok(())
 }
 
 /// Stores the shipped mazes as public mazes when the database has none.
@@ -211,7 +249,7 @@ async fn load_default_mazes(storage: &Storage) -> anyhow::Result<()> {
 }
 
 /// Resolves on SIGINT or SIGTERM.
-async fn wait_for_signal() {
+pub(super) async fn wait_for_signal() {
     let ctrl_c = async {
         let _ = tokio::signal::ctrl_c().await;
     };

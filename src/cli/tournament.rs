@@ -216,6 +216,7 @@ async fn play(
             sandbox,
             only_tournament: Some(t.tournament_id),
             exit_when_idle: true,
+            report_as: None,
         },
         None,
         Arc::new(Notify::new()),

@@ -139,7 +139,7 @@ impl Storage {
         let mut tx = self.pool().begin().await?;
         let now = now_ms();
         let bot_id: i64 = sqlx::query_scalar(
-            "insert into bot (name, owner_token_hash, created_at) values (?, ?, ?) returning bot_id",
+            "insert into bot (name, owner_token_hash, created_at) values ($1, $2, $3) returning bot_id",
         )
         .bind(name)
         .bind(owner_token_hash)
@@ -207,7 +207,7 @@ impl Storage {
     /// Database failures.
     pub async fn get_bot(&self, bot_id: i64) -> Result<Option<BotRow>> {
         Ok(
-            sqlx::query_as(&format!("{BOT_WITH_LATEST} and b.bot_id = ?"))
+            sqlx::query_as(&format!("{BOT_WITH_LATEST} and b.bot_id = $1"))
                 .bind(bot_id)
                 .fetch_optional(self.pool())
                 .await?,
@@ -219,10 +219,12 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn get_bot_by_name(&self, name: &str) -> Result<Option<BotRow>> {
-        Ok(sqlx::query_as(&format!("{BOT_WITH_LATEST} and b.name = ?"))
-            .bind(name)
-            .fetch_optional(self.pool())
-            .await?)
+        Ok(
+            sqlx::query_as(&format!("{BOT_WITH_LATEST} and b.name = $1"))
+                .bind(name)
+                .fetch_optional(self.pool())
+                .await?,
+        )
     }
 
     /// Every bot with its latest version, by id.
@@ -243,7 +245,7 @@ impl Storage {
     /// Database failures.
     pub async fn bot_versions(&self, bot_id: i64) -> Result<Vec<BotVersionRow>> {
         Ok(
-            sqlx::query_as("select * from bot_version where bot_id = ? order by version")
+            sqlx::query_as("select * from bot_version where bot_id = $1 order by version")
                 .bind(bot_id)
                 .fetch_all(self.pool())
                 .await?,
@@ -256,7 +258,7 @@ impl Storage {
     /// Database failures.
     pub async fn get_bot_version(&self, bot_version_id: i64) -> Result<Option<BotVersionRow>> {
         Ok(
-            sqlx::query_as("select * from bot_version where bot_version_id = ?")
+            sqlx::query_as("select * from bot_version where bot_version_id = $1")
                 .bind(bot_version_id)
                 .fetch_optional(self.pool())
                 .await?,
@@ -268,25 +270,26 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn is_bot_owner(&self, bot_id: i64, token_hash: &str) -> Result<bool> {
-        let found: Option<i64> =
-            sqlx::query_scalar("select bot_id from bot where bot_id = ? and owner_token_hash = ?")
-                .bind(bot_id)
-                .bind(token_hash)
-                .fetch_optional(self.pool())
-                .await?;
+        let found: Option<i64> = sqlx::query_scalar(
+            "select bot_id from bot where bot_id = $1 and owner_token_hash = $2",
+        )
+        .bind(bot_id)
+        .bind(token_hash)
+        .fetch_optional(self.pool())
+        .await?;
         Ok(found.is_some())
     }
 }
 
 /// See [`Storage::pause_bot`]; inside the caller's transaction.
 pub(super) async fn pause_bot_in(
-    tx: &mut sqlx::SqliteConnection,
+    tx: &mut sqlx::AnyConnection,
     bot_id: i64,
     reason: &str,
     now: i64,
 ) -> Result<bool> {
     let done = sqlx::query(
-        "update bot set paused_reason = ?, paused_at = ? where bot_id = ? and paused_at is null",
+        "update bot set paused_reason = $1, paused_at = $2 where bot_id = $3 and paused_at is null",
     )
     .bind(reason)
     .bind(now)
@@ -297,9 +300,9 @@ pub(super) async fn pause_bot_in(
         return Ok(false);
     }
     sqlx::query(
-        "update match set status = 'aborted', record = ?, finished_at = ?
+        "update match set status = 'aborted', record = $1, finished_at = $2
          where status = 'queued'
-             and bot_version_id in (select bot_version_id from bot_version where bot_id = ?)",
+             and bot_version_id in (select bot_version_id from bot_version where bot_id = $3)",
     )
     .bind(failure_record(
         MatchStatus::Aborted,
@@ -313,10 +316,10 @@ pub(super) async fn pause_bot_in(
 }
 
 /// See [`Storage::resume_bot`]; inside the caller's transaction.
-async fn resume_in(tx: &mut sqlx::SqliteConnection, bot_id: i64) -> Result<bool> {
+async fn resume_in(tx: &mut sqlx::AnyConnection, bot_id: i64) -> Result<bool> {
     let done = sqlx::query(
-        "update bot set paused_reason = null, paused_at = null, resumed_at = ?
-         where bot_id = ? and paused_at is not null",
+        "update bot set paused_reason = null, paused_at = null, resumed_at = $1
+         where bot_id = $2 and paused_at is not null",
     )
     .bind(now_ms())
     .bind(bot_id)
@@ -326,7 +329,7 @@ async fn resume_in(tx: &mut sqlx::SqliteConnection, bot_id: i64) -> Result<bool>
 }
 
 async fn insert_version(
-    tx: &mut sqlx::SqliteConnection,
+    tx: &mut sqlx::AnyConnection,
     bot_id: i64,
     new: &NewVersion<'_>,
 ) -> Result<BotVersionRow> {
@@ -338,8 +341,8 @@ async fn insert_version(
     Ok(sqlx::query_as(
         "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at,
              build_command, build_status, env)
-         values (?, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = ?), ?, ?, ?, ?, ?,
-             ?, ?, ?)
+         values ($1, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = $2), $3, $4, $5, $6, $7,
+             $8, $9, $10)
          returning *",
     )
     .bind(bot_id)
@@ -359,7 +362,7 @@ async fn insert_version(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage::test_support::fresh;
+    use crate::storage::test_support::backends;
 
     fn version<'a>(command: &'a str) -> NewVersion<'a> {
         NewVersion {
@@ -374,29 +377,30 @@ mod tests {
 
     #[tokio::test]
     async fn bots_get_versions_and_owners() {
-        let (db, _dir) = fresh().await;
-        let v1 = db
-            .create_bot("alpha", "h1", &version("python3 a.py"))
-            .await
-            .unwrap();
-        assert_eq!(v1.version, 1);
-        let v2 = db
-            .add_bot_version(v1.bot_id, &version("python3 b.py"))
-            .await
-            .unwrap();
-        assert_eq!(v2.version, 2);
-        let bot = db.get_bot(v1.bot_id).await.unwrap().unwrap();
-        assert_eq!((bot.version, bot.command.as_str()), (2, "python3 b.py"));
-        assert_eq!(db.bot_versions(v1.bot_id).await.unwrap().len(), 2);
-        assert!(db.is_bot_owner(v1.bot_id, "h1").await.unwrap());
-        assert!(!db.is_bot_owner(v1.bot_id, "h2").await.unwrap());
-        assert_eq!(
-            db.get_bot_by_name("alpha").await.unwrap().unwrap().bot_id,
-            v1.bot_id
-        );
-        assert!(db.get_bot(999).await.unwrap().is_none());
-        let clash = db.create_bot("alpha", "h3", &version("x")).await;
-        assert!(matches!(clash, Err(StorageError::Conflict(_))));
-        assert_eq!(db.list_bots().await.unwrap().len(), 1);
+        for (db, _guard) in backends().await {
+            let v1 = db
+                .create_bot("alpha", "h1", &version("python3 a.py"))
+                .await
+                .unwrap();
+            assert_eq!(v1.version, 1);
+            let v2 = db
+                .add_bot_version(v1.bot_id, &version("python3 b.py"))
+                .await
+                .unwrap();
+            assert_eq!(v2.version, 2);
+            let bot = db.get_bot(v1.bot_id).await.unwrap().unwrap();
+            assert_eq!((bot.version, bot.command.as_str()), (2, "python3 b.py"));
+            assert_eq!(db.bot_versions(v1.bot_id).await.unwrap().len(), 2);
+            assert!(db.is_bot_owner(v1.bot_id, "h1").await.unwrap());
+            assert!(!db.is_bot_owner(v1.bot_id, "h2").await.unwrap());
+            assert_eq!(
+                db.get_bot_by_name("alpha").await.unwrap().unwrap().bot_id,
+                v1.bot_id
+            );
+            assert!(db.get_bot(999).await.unwrap().is_none());
+            let clash = db.create_bot("alpha", "h3", &version("x")).await;
+            assert!(matches!(clash, Err(StorageError::Conflict(_))));
+            assert_eq!(db.list_bots().await.unwrap().len(), 1);
+        }
     }
 }

@@ -19,7 +19,7 @@ impl Storage {
     /// Database failures.
     pub async fn next_build(&self) -> Result<Option<BotVersionRow>> {
         Ok(sqlx::query_as(
-            "select * from bot_version where build_status = ? order by bot_version_id limit 1",
+            "select * from bot_version where build_status = $1 order by bot_version_id limit 1",
         )
         .bind(build_status::BUILDING)
         .fetch_optional(self.pool())
@@ -48,8 +48,8 @@ impl Storage {
         let now = now_ms();
         let mut tx = self.pool().begin().await?;
         sqlx::query(
-            "update bot_version set build_status = ?, build_log = ?, built_at = ?
-             where bot_version_id = ?",
+            "update bot_version set build_status = $1, build_log = $2, built_at = $3
+             where bot_version_id = $4",
         )
         .bind(status)
         .bind(&log)
@@ -67,8 +67,8 @@ impl Storage {
                 .take(300)
                 .collect();
             sqlx::query(
-                "update match set status = 'crashed', record = ?, finished_at = ?
-                 where status = 'queued' and bot_version_id = ?",
+                "update match set status = 'crashed', record = $1, finished_at = $2
+                 where status = 'queued' and bot_version_id = $3",
             )
             .bind(failure_record(
                 MatchStatus::Crashed,
@@ -87,45 +87,46 @@ impl Storage {
 #[cfg(test)]
 mod tests {
     use crate::storage::bots::{NewVersion, build_status};
-    use crate::storage::test_support::fresh;
+    use crate::storage::test_support::backends;
 
     #[tokio::test]
     async fn versions_with_a_build_wait_for_it_and_a_failed_build_fails_their_matches() {
-        let (db, _dir) = fresh().await;
-        let v = db
-            .create_bot(
-                "c-bot",
-                "h",
-                &NewVersion {
-                    command: "./bot",
-                    dir: "/x",
-                    files_sha256: "s",
-                    file_count: 1,
-                    build_command: Some("make"),
-                    env: &[],
-                },
-            )
-            .await
-            .unwrap();
-        assert_eq!(v.build_status, build_status::BUILDING);
-        let maze = crate::storage::test_support::bot_and_maze(&db).await.1;
-        let m = db.queue_match(v.bot_version_id, maze, 1).await.unwrap();
-        // Not claimed while building.
-        let claimed = db.claim_next("w", 1000, None).await.unwrap();
-        assert!(claimed.is_none_or(|c| c.match_id != m));
-        assert_eq!(
-            db.next_build().await.unwrap().unwrap().bot_version_id,
-            v.bot_version_id
-        );
-        db.finish_build(v.bot_version_id, false, "cc: error: no such file\n")
-            .await
-            .unwrap();
-        assert!(db.next_build().await.unwrap().is_none());
-        let row = db.get_match(m).await.unwrap().unwrap();
-        assert_eq!(row.status, "crashed");
-        assert!(row.record.unwrap().contains("build failed: cc: error"));
-        let v = db.get_bot_version(v.bot_version_id).await.unwrap().unwrap();
-        assert_eq!(v.build_status, build_status::FAILED);
-        assert!(v.build_log.unwrap().contains("no such file"));
+        for (db, _guard) in backends().await {
+            let v = db
+                .create_bot(
+                    "c-bot",
+                    "h",
+                    &NewVersion {
+                        command: "./bot",
+                        dir: "/x",
+                        files_sha256: "s",
+                        file_count: 1,
+                        build_command: Some("make"),
+                        env: &[],
+                    },
+                )
+                .await
+                .unwrap();
+            assert_eq!(v.build_status, build_status::BUILDING);
+            let maze = crate::storage::test_support::bot_and_maze(&db).await.1;
+            let m = db.queue_match(v.bot_version_id, maze, 1).await.unwrap();
+            // Not claimed while building.
+            let claimed = db.claim_next("w", 1000, None).await.unwrap();
+            assert!(claimed.is_none_or(|c| c.match_id != m));
+            assert_eq!(
+                db.next_build().await.unwrap().unwrap().bot_version_id,
+                v.bot_version_id
+            );
+            db.finish_build(v.bot_version_id, false, "cc: error: no such file\n")
+                .await
+                .unwrap();
+            assert!(db.next_build().await.unwrap().is_none());
+            let row = db.get_match(m).await.unwrap().unwrap();
+            assert_eq!(row.status, "crashed");
+            assert!(row.record.unwrap().contains("build failed: cc: error"));
+            let v = db.get_bot_version(v.bot_version_id).await.unwrap().unwrap();
+            assert_eq!(v.build_status, build_status::FAILED);
+            assert!(v.build_log.unwrap().contains("no such file"));
+        }
     }
 }

@@ -56,25 +56,28 @@ impl Storage {
     /// Database failures.
     pub async fn leaderboard(&self, scope: Scope) -> Result<Vec<Standing>> {
         let filter = match scope {
-            Scope::Tournament(_) => "s.tournament_id = ?",
+            Scope::Tournament(_) => "s.tournament_id = $1",
             Scope::Ranking => {
-                "s.tournament_id = -1 and s.hidden = 1 and ? is null and v.version = b.latest"
+                "s.tournament_id = -1 and s.hidden = 1 and cast($1 as bigint) is null and v.version = b.latest"
             }
-            Scope::All => "s.tournament_id = -1 and ? is null and v.version = b.latest",
+            Scope::All => {
+                "s.tournament_id = -1 and cast($1 as bigint) is null and v.version = b.latest"
+            }
         };
         let sql = format!(
-            "select b.bot_id, b.name, v.version, sum(s.played) as played,
-                 sum(s.finished) as finished,
-                 sum(s.score_sum) / sum(s.played) as mean_score,
-                 1.0 * sum(s.finished) / sum(s.played) as finish_rate,
-                 case when sum(s.ratio_count) > 0 then sum(s.ratio_sum) / sum(s.ratio_count) end as mean_ratio,
-                 sum(s.played * s.hidden) as hidden_played
+            "select b.bot_id, b.name, v.version, cast(sum(s.played) as bigint) as played,
+                 cast(sum(s.finished) as bigint) as finished,
+                 cast(sum(s.score_sum) / sum(s.played) as double precision) as mean_score,
+                 cast(1.0 * sum(s.finished) / sum(s.played) as double precision) as finish_rate,
+                 cast(case when sum(s.ratio_count) > 0 then sum(s.ratio_sum) / sum(s.ratio_count) end
+                      as double precision) as mean_ratio,
+                 cast(sum(s.played * s.hidden) as bigint) as hidden_played
              from standing s
              join bot_version v on v.bot_version_id = s.bot_version_id
              join (select bot_id, name, (select max(version) from bot_version x where x.bot_id = bot.bot_id) as latest
                    from bot) b on b.bot_id = v.bot_id
              where s.played > 0 and {filter}
-             group by v.bot_version_id
+             group by v.bot_version_id, b.bot_id, b.name, v.version
              order by mean_score asc, finish_rate desc, b.name asc"
         );
         self.standings(&sql, scope).await
@@ -89,27 +92,30 @@ impl Storage {
     /// Database failures.
     pub async fn leaderboard_recount(&self, scope: Scope) -> Result<Vec<Standing>> {
         let filter = match scope {
-            Scope::Tournament(_) => "m.tournament_id = ?",
+            Scope::Tournament(_) => "m.tournament_id = $1",
             Scope::Ranking => {
-                "z.hidden = 1 and ? is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)"
+                "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)"
             }
             Scope::All => {
-                "? is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)"
+                "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)"
             }
         };
         let sql = format!(
             "select b.bot_id, b.name, v.version, count(*) as played,
-                 sum(m.status = 'finished') as finished,
-                 avg(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) as mean_score,
-                 avg(case when m.status = 'finished' then 1.0 else 0.0 end) as finish_rate,
-                 avg((case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) / z.optimum) as mean_ratio,
-                 sum(z.hidden) as hidden_played
+                 cast(sum(case when m.status = 'finished' then 1 else 0 end) as bigint) as finished,
+                 cast(avg(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end)
+                      as double precision) as mean_score,
+                 cast(avg(case when m.status = 'finished' then 1.0 else 0.0 end)
+                      as double precision) as finish_rate,
+                 cast(avg((case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) / z.optimum)
+                      as double precision) as mean_ratio,
+                 cast(sum(z.hidden) as bigint) as hidden_played
              from match m
              join bot_version v on v.bot_version_id = m.bot_version_id
              join bot b on b.bot_id = v.bot_id
              join maze z on z.maze_id = m.maze_id
              where m.status not in ('queued', 'running') and {filter}
-             group by v.bot_version_id
+             group by v.bot_version_id, b.bot_id, b.name, v.version
              order by mean_score asc, finish_rate desc, b.name asc"
         );
         self.standings(&sql, scope).await
@@ -135,7 +141,7 @@ impl Storage {
 mod tests {
     use super::*;
     use crate::runner::{MatchRecord, MatchStatus};
-    use crate::storage::test_support::{bot_and_maze, fresh, maze};
+    use crate::storage::test_support::{backends, bot_and_maze, maze};
 
     fn record(status: MatchStatus, score: Option<f64>) -> MatchRecord {
         serde_json::from_value(serde_json::json!({
@@ -165,61 +171,62 @@ mod tests {
 
     #[tokio::test]
     async fn the_running_sums_follow_every_way_a_match_gets_or_loses_its_status() {
-        let (db, _dir) = fresh().await;
-        let (v, z) = bot_and_maze(&db).await;
-        assert!(db.leaderboard(Scope::All).await.unwrap().is_empty());
-        let t = db.create_tournament("t", &[v], &[z], 3).await.unwrap();
-        // Finished (score 1.1), crashed by the worker, and one left queued.
-        let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
-        assert!(
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            assert!(db.leaderboard(Scope::All).await.unwrap().is_empty());
+            let t = db.create_tournament("t", &[v], &[z], 3).await.unwrap();
+            // Finished (score 1.1), crashed by the worker, and one left queued.
+            let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            assert!(
+                db.complete_match(
+                    a.match_id,
+                    "w",
+                    &record(MatchStatus::Finished, Some(1.1)),
+                    &maze()
+                )
+                .await
+                .unwrap()
+            );
+            let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            assert!(db.fail_match(b.match_id, "w", "ours").await.unwrap());
+            let board = same_as_recount(&db, Scope::Tournament(t.tournament_id)).await;
+            assert_eq!((board[0].played, board[0].finished), (2, 1));
+            assert!((board[0].mean_score - (1.1 + DNF_SCORE) / 2.0).abs() < 1e-9);
+            assert!((board[0].mean_ratio.unwrap() - (1.1 + DNF_SCORE) / 2.0).abs() < 1e-9);
+            same_as_recount(&db, Scope::All).await;
+            // A single match outside the tournament counts in `All`, not in the tournament.
+            let single = db.queue_match(v, z, 5).await.unwrap();
+            let c = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            assert_eq!(c.match_id, single);
             db.complete_match(
-                a.match_id,
+                c.match_id,
                 "w",
-                &record(MatchStatus::Finished, Some(1.1)),
-                &maze()
+                &record(MatchStatus::Timeout, None),
+                &maze(),
             )
             .await
-            .unwrap()
-        );
-        let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
-        assert!(db.fail_match(b.match_id, "w", "ours").await.unwrap());
-        let board = same_as_recount(&db, Scope::Tournament(t.tournament_id)).await;
-        assert_eq!((board[0].played, board[0].finished), (2, 1));
-        assert!((board[0].mean_score - (1.1 + DNF_SCORE) / 2.0).abs() < 1e-9);
-        assert!((board[0].mean_ratio.unwrap() - (1.1 + DNF_SCORE) / 2.0).abs() < 1e-9);
-        same_as_recount(&db, Scope::All).await;
-        // A single match outside the tournament counts in `All`, not in the tournament.
-        let single = db.queue_match(v, z, 5).await.unwrap();
-        let c = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
-        assert_eq!(c.match_id, single);
-        db.complete_match(
-            c.match_id,
-            "w",
-            &record(MatchStatus::Timeout, None),
-            &maze(),
-        )
-        .await
-        .unwrap();
-        assert_eq!(same_as_recount(&db, Scope::All).await[0].played, 3);
-        assert_eq!(
-            same_as_recount(&db, Scope::Tournament(t.tournament_id)).await[0].played,
-            2
-        );
-        // Rows that change or vanish by other statements are followed too.
-        sqlx::query("update match set status = 'finished', score = 2.0 where match_id = ?")
-            .bind(b.match_id)
-            .execute(db.pool())
-            .await
             .unwrap();
-        assert_eq!(same_as_recount(&db, Scope::All).await[0].finished, 2);
-        sqlx::query("delete from match where match_id = ?")
-            .bind(a.match_id)
-            .execute(db.pool())
-            .await
-            .unwrap();
-        let all = same_as_recount(&db, Scope::All).await;
-        assert_eq!((all[0].played, all[0].finished), (2, 1));
-        // No hidden maze: no ranking.
-        assert!(same_as_recount(&db, Scope::Ranking).await.is_empty());
+            assert_eq!(same_as_recount(&db, Scope::All).await[0].played, 3);
+            assert_eq!(
+                same_as_recount(&db, Scope::Tournament(t.tournament_id)).await[0].played,
+                2
+            );
+            // Rows that change or vanish by other statements are followed too.
+            sqlx::query("update match set status = 'finished', score = 2.0 where match_id = $1")
+                .bind(b.match_id)
+                .execute(db.pool())
+                .await
+                .unwrap();
+            assert_eq!(same_as_recount(&db, Scope::All).await[0].finished, 2);
+            sqlx::query("delete from match where match_id = $1")
+                .bind(a.match_id)
+                .execute(db.pool())
+                .await
+                .unwrap();
+            let all = same_as_recount(&db, Scope::All).await;
+            assert_eq!((all[0].played, all[0].finished), (2, 1));
+            // No hidden maze: no ranking.
+            assert!(same_as_recount(&db, Scope::Ranking).await.is_empty());
+        }
     }
 }

@@ -3,9 +3,9 @@
 //! A match whose lease expired (its server died while it ran) is retried a bounded
 //! number of times ([`super::retries`]).
 
-use sqlx::{FromRow, QueryBuilder, Sqlite};
+use sqlx::FromRow;
 
-use super::{Result, Storage, StorageError, now_ms, records};
+use super::{Backend, Result, Storage, StorageError, now_ms, records};
 use crate::engine::{Maze, mazefile};
 use crate::runner::MatchRecord;
 use crate::runner::outcome::{MatchState, MatchStatus, MatchSummary};
@@ -33,6 +33,7 @@ pub struct MatchRow {
     /// The maze's name.
     pub maze_name: String,
     /// Whether the maze is hidden.
+    #[sqlx(try_from = "super::Flag")]
     pub maze_hidden: bool,
     /// SHA-256 of the maze's canonical text.
     pub maze_hash: String,
@@ -123,9 +124,10 @@ impl StoredRecord {
     }
 
     /// Writes the compact record (the caller writes the summary with its row).
-    async fn put(&self, tx: &mut sqlx::SqliteConnection) -> Result<()> {
+    async fn put(&self, tx: &mut sqlx::AnyConnection) -> Result<()> {
         sqlx::query(
-            "insert or replace into match_record (match_id, encoding, data) values (?, ?, ?)",
+            "insert into match_record (match_id, encoding, data) values ($1, $2, $3)
+             on conflict (match_id) do update set encoding = excluded.encoding, data = excluded.data",
         )
         .bind(self.match_id)
         .bind(self.encoding)
@@ -183,16 +185,28 @@ pub struct Page {
     pub limit: i64,
 }
 
-/// A match with its names; the match table leads (`cross join` keeps SQLite from
-/// starting elsewhere), so that a filtered list walks the filter's index.
-const MATCH_SELECT: &str = "select m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
+/// A match's columns with its names (for [`Storage::match_select`]).
+const MATCH_COLUMNS: &str = "m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
         z.name as maze_name, z.hidden as maze_hidden, z.hash as maze_hash, z.dim as maze_dim, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
-        m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at
-     from match m cross join bot_version v on v.bot_version_id = m.bot_version_id
-     cross join bot b on b.bot_id = v.bot_id
-     cross join maze z on z.maze_id = m.maze_id";
+        m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at";
 
 impl Storage {
+    /// The select of a match with its names, for a where clause on `match m` to follow.
+    /// The match table leads: on SQLite, `cross join` keeps the planner from starting
+    /// elsewhere, so that a filtered list walks the filter's index.
+    fn match_select(&self) -> String {
+        let join = match self.backend() {
+            Backend::Sqlite => "cross join",
+            Backend::Postgres => "join",
+        };
+        format!(
+            "select {MATCH_COLUMNS}
+             from match m {join} bot_version v on v.bot_version_id = m.bot_version_id
+             {join} bot b on b.bot_id = v.bot_id
+             {join} maze z on z.maze_id = m.maze_id"
+        )
+    }
+
     /// Queues a single match.
     ///
     /// # Errors
@@ -200,7 +214,7 @@ impl Storage {
     pub async fn queue_match(&self, bot_version_id: i64, maze_id: i64, seed: i64) -> Result<i64> {
         Ok(sqlx::query_scalar(
             "insert into match (bot_version_id, maze_id, seed, priority, created_at)
-             values (?, ?, ?, ?, ?) returning match_id",
+             values ($1, $2, $3, $4, $5) returning match_id",
         )
         .bind(bot_version_id)
         .bind(maze_id)
@@ -237,22 +251,28 @@ impl Storage {
     ) -> Result<Option<ClaimedMatch>> {
         let turn = self.write_turn().await;
         let now = now_ms();
-        let id: Option<i64> = sqlx::query_scalar(
-            "update match set status = 'running', lease_owner = ?, lease_expires_at = ?,
-                 attempts = attempts + 1, started_at = ?
+        // PostgreSQL: a claim skips the rows other workers are claiming at that moment
+        // (each worker locks the row it takes), so any number claim at once without
+        // waiting on each other. SQLite has one writer at a time.
+        let lock = match self.backend() {
+            Backend::Sqlite => "",
+            Backend::Postgres => "for update of m skip locked",
+        };
+        let id: Option<i64> = sqlx::query_scalar(&format!(
+            "update match set status = 'running', lease_owner = $1, lease_expires_at = $2,
+                 attempts = attempts + 1, started_at = $3
              where match_id = (
                  select m.match_id from match m
                  join bot_version v on v.bot_version_id = m.bot_version_id
                  join bot b on b.bot_id = v.bot_id
                  where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready'
-                     and (? is null or m.tournament_id = ?)
-                 order by m.priority, m.match_id limit 1)
-             returning match_id",
-        )
+                     and (cast($4 as bigint) is null or m.tournament_id = $4)
+                 order by m.priority, m.match_id limit 1 {lock})
+             returning match_id"
+        ))
         .bind(owner)
         .bind(now + lease_ms)
         .bind(now)
-        .bind(tournament)
         .bind(tournament)
         .fetch_optional(self.pool())
         .await?;
@@ -261,7 +281,7 @@ impl Storage {
         Ok(sqlx::query_as(
             "select m.match_id, m.seed, v.command, v.dir, z.layout, m.tournament_id, v.env
              from match m join bot_version v on v.bot_version_id = m.bot_version_id
-             join maze z on z.maze_id = m.maze_id where m.match_id = ?",
+             join maze z on z.maze_id = m.maze_id where m.match_id = $1",
         )
         .bind(id)
         .fetch_optional(self.pool())
@@ -275,8 +295,8 @@ impl Storage {
     pub async fn renew_lease(&self, match_id: i64, owner: &str, lease_ms: i64) -> Result<bool> {
         let _turn = self.write_turn().await;
         let done = sqlx::query(
-            "update match set lease_expires_at = ?
-             where match_id = ? and lease_owner = ? and status = 'running'",
+            "update match set lease_expires_at = $1
+             where match_id = $2 and lease_owner = $3 and status = 'running'",
         )
         .bind(now_ms() + lease_ms)
         .bind(match_id)
@@ -306,9 +326,9 @@ impl Storage {
         let _turn = self.write_turn().await;
         let mut tx = self.pool().begin().await?;
         let done = sqlx::query(
-            "update match set status = ?, score = ?, run0_steps = ?, run1_steps = ?, total_steps = ?,
-                 record = ?, trace = null, finished_at = ?, lease_owner = null, lease_expires_at = null
-             where match_id = ? and lease_owner = ? and status = 'running'",
+            "update match set status = $1, score = $2, run0_steps = $3, run1_steps = $4, total_steps = $5,
+                 record = $6, trace = null, finished_at = $7, lease_owner = null, lease_expires_at = null
+             where match_id = $8 and lease_owner = $9 and status = 'running'",
         )
         .bind(record.status.as_str())
         .bind(record.score)
@@ -339,7 +359,7 @@ impl Storage {
             "select m.record as summary, r.encoding, r.data, z.layout from match m
              join maze z on z.maze_id = m.maze_id
              left join match_record r on r.match_id = m.match_id
-             where m.match_id = ?",
+             where m.match_id = $1",
         )
         .bind(match_id)
         .fetch_optional(self.pool())
@@ -380,7 +400,7 @@ impl Storage {
             let rows: Vec<(i64, Option<String>, String, String)> = sqlx::query_as(
                 "select m.match_id, m.record, m.trace, z.layout from match m
                  join maze z on z.maze_id = m.maze_id
-                 where m.trace is not null and m.match_id > ? order by m.match_id limit ?",
+                 where m.trace is not null and m.match_id > $1 order by m.match_id limit $2",
             )
             .bind(after)
             .bind(BATCH)
@@ -412,7 +432,7 @@ impl Storage {
                     continue;
                 };
                 stored.put(&mut tx).await?;
-                sqlx::query("update match set record = ?, trace = null where match_id = ?")
+                sqlx::query("update match set record = $1, trace = null where match_id = $2")
                     .bind(&stored.summary)
                     .bind(match_id)
                     .execute(&mut *tx)
@@ -436,9 +456,9 @@ impl Storage {
         let record = failure_record(MatchStatus::Crashed, reason)?;
         let _turn = self.write_turn().await;
         let done = sqlx::query(
-            "update match set status = 'crashed', record = ?, finished_at = ?,
+            "update match set status = 'crashed', record = $1, finished_at = $2,
                  lease_owner = null, lease_expires_at = null
-             where match_id = ? and lease_owner = ? and status = 'running'",
+             where match_id = $3 and lease_owner = $4 and status = 'running'",
         )
         .bind(record)
         .bind(now_ms())
@@ -459,7 +479,7 @@ impl Storage {
         let _turn = self.write_turn().await;
         let done = sqlx::query(
             "update match set status = 'queued', lease_owner = null, lease_expires_at = null
-             where match_id = ? and lease_owner = ? and status = 'running'",
+             where match_id = $1 and lease_owner = $2 and status = 'running'",
         )
         .bind(match_id)
         .bind(owner)
@@ -485,7 +505,7 @@ impl Storage {
     /// Database failures.
     pub async fn get_match(&self, match_id: i64) -> Result<Option<MatchRow>> {
         Ok(
-            sqlx::query_as(&format!("{MATCH_SELECT} where m.match_id = ?"))
+            sqlx::query_as(&format!("{} where m.match_id = $1", self.match_select()))
                 .bind(match_id)
                 .fetch_optional(self.pool())
                 .await?,
@@ -502,17 +522,39 @@ impl Storage {
         filter: &MatchFilter,
         page: Page,
     ) -> Result<(Vec<MatchRow>, MatchCount)> {
-        let mut rows = QueryBuilder::new(MATCH_SELECT);
-        push_filter(&mut rows, filter, true);
-        rows.push(" order by m.match_id desc limit ")
-            .push_bind(page.limit)
-            .push(" offset ")
-            .push_bind(page.offset);
-        let rows = rows.build_query_as().fetch_all(self.pool()).await?;
-        let mut count = QueryBuilder::new("select count(*) from (select 1 from match m");
-        push_filter(&mut count, filter, false);
-        count.push(" limit ").push_bind(COUNT_CAP + 1).push(")");
-        let counted: i64 = count.build_query_scalar().fetch_one(self.pool()).await?;
+        let (clause, values) = filter_clause(filter, true);
+        let n = values.len();
+        let sql = format!(
+            "{}{clause} order by m.match_id desc limit ${} offset ${}",
+            self.match_select(),
+            n + 1,
+            n + 2
+        );
+        let mut rows = sqlx::query_as(&sql);
+        for value in &values {
+            rows = match value {
+                FilterValue::Id(id) => rows.bind(*id),
+                FilterValue::Text(text) => rows.bind(*text),
+            };
+        }
+        let rows = rows
+            .bind(page.limit)
+            .bind(page.offset)
+            .fetch_all(self.pool())
+            .await?;
+        let (clause, values) = filter_clause(filter, false);
+        let sql = format!(
+            "select count(*) from (select 1 from match m{clause} limit ${}) as counted",
+            values.len() + 1
+        );
+        let mut count = sqlx::query_scalar(&sql);
+        for value in &values {
+            count = match value {
+                FilterValue::Id(id) => count.bind(*id),
+                FilterValue::Text(text) => count.bind(*text),
+            };
+        }
+        let counted: i64 = count.bind(COUNT_CAP + 1).fetch_one(self.pool()).await?;
         Ok((
             rows,
             MatchCount {
@@ -528,7 +570,8 @@ impl Storage {
     /// Database failures.
     pub async fn tournament_matches(&self, tournament_id: i64) -> Result<Vec<MatchRow>> {
         Ok(sqlx::query_as(&format!(
-            "{MATCH_SELECT} where m.tournament_id = ? order by m.match_id"
+            "{} where m.tournament_id = $1 order by m.match_id",
+            self.match_select()
         ))
         .bind(tournament_id)
         .fetch_all(self.pool())
@@ -548,28 +591,38 @@ impl Storage {
     }
 }
 
-/// Appends `filter` as the where clause of a query on `match m`: only the conditions it
-/// sets, so that the database can use the index each one has (`before` only if
-/// `keyset`).
-fn push_filter(query: &mut QueryBuilder<'_, Sqlite>, filter: &MatchFilter, keyset: bool) {
-    query.push(" where 1 = 1");
+/// A value [`filter_clause`] binds.
+enum FilterValue {
+    Id(i64),
+    Text(&'static str),
+}
+
+/// `filter` as the where clause of a query on `match m`, with its parameters numbered
+/// from `$1`, and their values in order: only the conditions it sets, so that the
+/// database can use the index each one has (`before` only if `keyset`).
+fn filter_clause(filter: &MatchFilter, keyset: bool) -> (String, Vec<FilterValue>) {
+    let mut clause = String::from(" where 1 = 1");
+    let mut values = Vec::new();
+    let mut add = |column: &str, op: &str, value: FilterValue| {
+        values.push(value);
+        clause.push_str(&format!(" and m.{column} {op} ${}", values.len()));
+    };
     if let Some(bot_id) = filter.bot_id {
-        query.push(" and m.bot_id = ").push_bind(bot_id);
+        add("bot_id", "=", FilterValue::Id(bot_id));
     }
     if let Some(tournament_id) = filter.tournament_id {
-        query
-            .push(" and m.tournament_id = ")
-            .push_bind(tournament_id);
+        add("tournament_id", "=", FilterValue::Id(tournament_id));
     }
     if let Some(maze_id) = filter.maze_id {
-        query.push(" and m.maze_id = ").push_bind(maze_id);
+        add("maze_id", "=", FilterValue::Id(maze_id));
     }
     if let Some(status) = filter.status {
-        query.push(" and m.status = ").push_bind(status.as_str());
+        add("status", "=", FilterValue::Text(status.as_str()));
     }
     if let Some(before) = filter.before.filter(|_| keyset) {
-        query.push(" and m.match_id < ").push_bind(before);
+        add("match_id", "<", FilterValue::Id(before));
     }
+    (clause, values)
 }
 
 /// The summary (JSON, for the row) of a match the server ended without playing it.
@@ -586,7 +639,7 @@ pub(super) fn failure_record(status: MatchStatus, reason: &str) -> Result<String
 mod tests {
     use super::*;
     use crate::storage::leaderboard::Scope;
-    use crate::storage::test_support::{bot_and_maze, fresh, maze};
+    use crate::storage::test_support::{backends, bot_and_maze, maze};
 
     fn record(status: crate::runner::MatchStatus) -> MatchRecord {
         serde_json::from_value(serde_json::json!({
@@ -600,182 +653,187 @@ mod tests {
 
     #[tokio::test]
     async fn single_matches_are_claimed_before_tournament_matches() {
-        let (db, _dir) = fresh().await;
-        let (v, z) = bot_and_maze(&db).await;
-        let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
-        assert_eq!((t.total, t.done), (2, 0));
-        let single = db.queue_match(v, z, 9).await.unwrap();
-        assert_eq!(db.queued_count().await.unwrap(), 3);
-        let first = db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
-        assert_eq!(first.match_id, single);
-        assert_eq!(first.seed, 9);
-        let second = db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
-        assert_eq!(second.tournament_id, Some(t.tournament_id));
-        // Only that tournament's matches when asked.
-        let third = db
-            .claim_next("w2", 60_000, Some(t.tournament_id + 1))
-            .await
-            .unwrap();
-        assert!(third.is_none());
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
+            assert_eq!((t.total, t.done), (2, 0));
+            let single = db.queue_match(v, z, 9).await.unwrap();
+            assert_eq!(db.queued_count().await.unwrap(), 3);
+            let first = db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
+            assert_eq!(first.match_id, single);
+            assert_eq!(first.seed, 9);
+            let second = db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
+            assert_eq!(second.tournament_id, Some(t.tournament_id));
+            // Only that tournament's matches when asked.
+            let third = db
+                .claim_next("w2", 60_000, Some(t.tournament_id + 1))
+                .await
+                .unwrap();
+            assert!(third.is_none());
+        }
     }
 
     #[tokio::test]
     async fn a_record_is_written_once_and_only_by_the_lease_holder() {
-        let (db, _dir) = fresh().await;
-        let (v, z) = bot_and_maze(&db).await;
-        let id = db.queue_match(v, z, 1).await.unwrap();
-        db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
-        let finished = crate::runner::MatchStatus::Finished;
-        assert!(
-            !db.complete_match(id, "w2", &record(finished), &maze())
-                .await
-                .unwrap()
-        );
-        assert!(
-            db.complete_match(id, "w1", &record(finished), &maze())
-                .await
-                .unwrap()
-        );
-        assert!(
-            !db.complete_match(id, "w1", &record(finished), &maze())
-                .await
-                .unwrap()
-        );
-        let row = db.get_match(id).await.unwrap().unwrap();
-        assert_eq!(row.status, "finished");
-        assert_eq!(row.score, Some(1.1));
-        assert_eq!(row.attempts, 1);
-        assert!(db.claim_next("w1", 60_000, None).await.unwrap().is_none());
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            let id = db.queue_match(v, z, 1).await.unwrap();
+            db.claim_next("w1", 60_000, None).await.unwrap().unwrap();
+            let finished = crate::runner::MatchStatus::Finished;
+            assert!(
+                !db.complete_match(id, "w2", &record(finished), &maze())
+                    .await
+                    .unwrap()
+            );
+            assert!(
+                db.complete_match(id, "w1", &record(finished), &maze())
+                    .await
+                    .unwrap()
+            );
+            assert!(
+                !db.complete_match(id, "w1", &record(finished), &maze())
+                    .await
+                    .unwrap()
+            );
+            let row = db.get_match(id).await.unwrap().unwrap();
+            assert_eq!(row.status, "finished");
+            assert_eq!(row.score, Some(1.1));
+            assert_eq!(row.attempts, 1);
+            assert!(db.claim_next("w1", 60_000, None).await.unwrap().is_none());
+        }
     }
 
     #[tokio::test]
     async fn expired_leases_go_back_to_the_queue() {
-        let (db, _dir) = fresh().await;
-        let (v, z) = bot_and_maze(&db).await;
-        let id = db.queue_match(v, z, 1).await.unwrap();
-        db.claim_next("dead", -1, None).await.unwrap().unwrap();
-        assert!(!db.renew_lease(id, "other", 1000).await.unwrap());
-        assert_eq!(db.requeue_expired().await.unwrap(), 1);
-        let again = db.claim_next("w2", 60_000, None).await.unwrap().unwrap();
-        assert_eq!(again.match_id, id);
-        // The dead worker can no longer write.
-        let status = crate::runner::MatchStatus::Crashed;
-        assert!(
-            !db.complete_match(id, "dead", &record(status), &maze())
-                .await
-                .unwrap()
-        );
-        assert!(db.renew_lease(id, "w2", 1000).await.unwrap());
-        assert!(db.release_match(id, "w2").await.unwrap());
-        assert_eq!(db.get_match(id).await.unwrap().unwrap().attempts, 2);
-        assert_eq!(db.queued_count().await.unwrap(), 1);
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            let id = db.queue_match(v, z, 1).await.unwrap();
+            db.claim_next("dead", -1, None).await.unwrap().unwrap();
+            assert!(!db.renew_lease(id, "other", 1000).await.unwrap());
+            assert_eq!(db.requeue_expired().await.unwrap(), 1);
+            let again = db.claim_next("w2", 60_000, None).await.unwrap().unwrap();
+            assert_eq!(again.match_id, id);
+            // The dead worker can no longer write.
+            let status = crate::runner::MatchStatus::Crashed;
+            assert!(
+                !db.complete_match(id, "dead", &record(status), &maze())
+                    .await
+                    .unwrap()
+            );
+            assert!(db.renew_lease(id, "w2", 1000).await.unwrap());
+            assert!(db.release_match(id, "w2").await.unwrap());
+            assert_eq!(db.get_match(id).await.unwrap().unwrap().attempts, 2);
+            assert_eq!(db.queued_count().await.unwrap(), 1);
+        }
     }
 
     #[tokio::test]
     async fn the_leaderboard_counts_a_dnf_as_1000() {
-        let (db, _dir) = fresh().await;
-        let (v, z) = bot_and_maze(&db).await;
-        let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
-        let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
-        db.complete_match(
-            a.match_id,
-            "w",
-            &record(crate::runner::MatchStatus::Finished),
-            &maze(),
-        )
-        .await
-        .unwrap();
-        let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
-        db.complete_match(
-            b.match_id,
-            "w",
-            &record(crate::runner::MatchStatus::Timeout),
-            &maze(),
-        )
-        .await
-        .unwrap();
-        let board = db
-            .leaderboard(Scope::Tournament(t.tournament_id))
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
+            let a = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            db.complete_match(
+                a.match_id,
+                "w",
+                &record(crate::runner::MatchStatus::Finished),
+                &maze(),
+            )
             .await
             .unwrap();
-        assert_eq!(board.len(), 1);
-        let s = &board[0];
-        assert_eq!((s.rank, s.played, s.finished), (1, 2, 1));
-        assert!((s.mean_score - (1.1 + 1000.0) / 2.0).abs() < 1e-9);
-        assert!((s.finish_rate - 0.5).abs() < 1e-9);
-        assert!((s.mean_ratio.unwrap() - (1.1 + 1000.0) / 2.0).abs() < 1e-9);
-        // The maze is public: the ranking board is empty, the all-mazes board is not.
-        assert!(db.leaderboard(Scope::Ranking).await.unwrap().is_empty());
-        assert_eq!(db.leaderboard(Scope::All).await.unwrap().len(), 1);
-        assert_eq!(
-            db.get_tournament(t.tournament_id)
+            let b = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            db.complete_match(
+                b.match_id,
+                "w",
+                &record(crate::runner::MatchStatus::Timeout),
+                &maze(),
+            )
+            .await
+            .unwrap();
+            let board = db
+                .leaderboard(Scope::Tournament(t.tournament_id))
                 .await
-                .unwrap()
-                .unwrap()
-                .done,
-            2
-        );
+                .unwrap();
+            assert_eq!(board.len(), 1);
+            let s = &board[0];
+            assert_eq!((s.rank, s.played, s.finished), (1, 2, 1));
+            assert!((s.mean_score - (1.1 + 1000.0) / 2.0).abs() < 1e-9);
+            assert!((s.finish_rate - 0.5).abs() < 1e-9);
+            assert!((s.mean_ratio.unwrap() - (1.1 + 1000.0) / 2.0).abs() < 1e-9);
+            // The maze is public: the ranking board is empty, the all-mazes board is not.
+            assert!(db.leaderboard(Scope::Ranking).await.unwrap().is_empty());
+            assert_eq!(db.leaderboard(Scope::All).await.unwrap().len(), 1);
+            assert_eq!(
+                db.get_tournament(t.tournament_id)
+                    .await
+                    .unwrap()
+                    .unwrap()
+                    .done,
+                2
+            );
+        }
     }
 
     #[tokio::test]
     async fn lists_page_by_the_last_match_shown_and_count_up_to_a_cap() {
-        let (db, _dir) = fresh().await;
-        let (v, z) = bot_and_maze(&db).await;
-        let bot = db.get_bot_version(v).await.unwrap().unwrap().bot_id;
-        let mut ids = Vec::new();
-        for seed in 0..5 {
-            ids.push(db.queue_match(v, z, seed).await.unwrap());
-        }
-        let page = Page {
-            offset: 0,
-            limit: 2,
-        };
-        let list = |filter: MatchFilter| {
-            let db = db.clone();
-            async move {
-                let (rows, count) = db.list_matches(&filter, page).await.unwrap();
-                (rows.iter().map(|r| r.match_id).collect::<Vec<_>>(), count)
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            let bot = db.get_bot_version(v).await.unwrap().unwrap().bot_id;
+            let mut ids = Vec::new();
+            for seed in 0..5 {
+                ids.push(db.queue_match(v, z, seed).await.unwrap());
             }
-        };
-        let exact = |total| MatchCount { total, exact: true };
-        assert_eq!(
-            list(MatchFilter::default()).await,
-            (vec![ids[4], ids[3]], exact(5))
-        );
-        // The next page starts before the last match shown; the count is the list's.
-        let older = MatchFilter {
-            before: Some(ids[3]),
-            ..MatchFilter::default()
-        };
-        assert_eq!(list(older).await, (vec![ids[2], ids[1]], exact(5)));
-        // Each row knows its bot (the filter's index), whoever wrote it.
-        let of = |bot_id| MatchFilter {
-            bot_id: Some(bot_id),
-            status: Some(MatchState::Queued),
-            ..MatchFilter::default()
-        };
-        assert_eq!(list(of(bot)).await.1, exact(5));
-        assert_eq!(list(of(bot + 1)).await, (vec![], exact(0)));
-        // Past the cap, the count says so instead of counting on.
-        sqlx::query(
-            "with recursive n(i) as (select 1 union all select i + 1 from n where i < ?)
+            let page = Page {
+                offset: 0,
+                limit: 2,
+            };
+            let list = |filter: MatchFilter| {
+                let db = db.clone();
+                async move {
+                    let (rows, count) = db.list_matches(&filter, page).await.unwrap();
+                    (rows.iter().map(|r| r.match_id).collect::<Vec<_>>(), count)
+                }
+            };
+            let exact = |total| MatchCount { total, exact: true };
+            assert_eq!(
+                list(MatchFilter::default()).await,
+                (vec![ids[4], ids[3]], exact(5))
+            );
+            // The next page starts before the last match shown; the count is the list's.
+            let older = MatchFilter {
+                before: Some(ids[3]),
+                ..MatchFilter::default()
+            };
+            assert_eq!(list(older).await, (vec![ids[2], ids[1]], exact(5)));
+            // Each row knows its bot (the filter's index), whoever wrote it.
+            let of = |bot_id| MatchFilter {
+                bot_id: Some(bot_id),
+                status: Some(MatchState::Queued),
+                ..MatchFilter::default()
+            };
+            assert_eq!(list(of(bot)).await.1, exact(5));
+            assert_eq!(list(of(bot + 1)).await, (vec![], exact(0)));
+            // Past the cap, the count says so instead of counting on.
+            sqlx::query(
+                "with recursive n(i) as (select 1 union all select i + 1 from n where i < $1)
              insert into match (bot_version_id, maze_id, seed, priority, created_at)
-             select ?, ?, i, 0, 0 from n",
-        )
-        .bind(COUNT_CAP)
-        .bind(v)
-        .bind(z)
-        .execute(db.pool())
-        .await
-        .unwrap();
-        let (rows, count) = list(of(bot)).await;
-        assert_eq!(rows.len(), 2);
-        assert_eq!(
-            count,
-            MatchCount {
-                total: COUNT_CAP,
-                exact: false
-            }
-        );
+             select $2, $3, i, 0, 0 from n",
+            )
+            .bind(COUNT_CAP)
+            .bind(v)
+            .bind(z)
+            .execute(db.pool())
+            .await
+            .unwrap();
+            let (rows, count) = list(of(bot)).await;
+            assert_eq!(rows.len(), 2);
+            assert_eq!(
+                count,
+                MatchCount {
+                    total: COUNT_CAP,
+                    exact: false
+                }
+            );
+        }
     }
 }

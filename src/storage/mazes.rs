@@ -18,6 +18,7 @@ pub struct MazeRow {
     /// Canonical numeric text.
     pub layout: String,
     /// Hidden (ranking) maze.
+    #[sqlx(try_from = "super::Flag")]
     pub hidden: bool,
     /// Fewest run-1 steps, if the goal is reachable.
     pub optimum: Option<i64>,
@@ -50,13 +51,13 @@ impl Storage {
     pub async fn insert_maze(&self, m: &NewMaze<'_>) -> Result<MazeRow> {
         let inserted = sqlx::query_as(
             "insert into maze (name, hash, dim, layout, hidden, optimum, created_at)
-             values (?, ?, ?, ?, ?, ?, ?) returning *",
+             values ($1, $2, $3, $4, $5, $6, $7) returning *",
         )
         .bind(m.name)
         .bind(m.hash)
         .bind(m.dim)
         .bind(m.layout)
-        .bind(m.hidden)
+        .bind(i64::from(m.hidden))
         .bind(m.optimum)
         .bind(now_ms())
         .fetch_one(self.pool())
@@ -82,7 +83,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn get_maze(&self, maze_id: i64) -> Result<Option<MazeRow>> {
-        Ok(sqlx::query_as("select * from maze where maze_id = ?")
+        Ok(sqlx::query_as("select * from maze where maze_id = $1")
             .bind(maze_id)
             .fetch_optional(self.pool())
             .await?)
@@ -93,7 +94,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn get_maze_by_hash(&self, hash: &str) -> Result<Option<MazeRow>> {
-        Ok(sqlx::query_as("select * from maze where hash = ?")
+        Ok(sqlx::query_as("select * from maze where hash = $1")
             .bind(hash)
             .fetch_optional(self.pool())
             .await?)
@@ -123,37 +124,38 @@ impl Storage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage::test_support::fresh;
+    use crate::storage::test_support::backends;
 
     #[tokio::test]
     async fn duplicate_layouts_are_refused_naming_the_first() {
-        let (db, _dir) = fresh().await;
-        let m = NewMaze {
-            name: "one",
-            hash: "h",
-            dim: 2,
-            layout: "2\n3,6\n9,12\n",
-            hidden: true,
-            optimum: Some(1),
-        };
-        let row = db.insert_maze(&m).await.unwrap();
-        assert!(row.hidden);
-        let again = db
-            .insert_maze(&NewMaze {
-                name: "two",
-                ..m.clone()
-            })
-            .await;
-        match again {
-            Err(StorageError::Conflict(msg)) => {
-                assert!(msg.contains(&format!("maze {}", row.maze_id)))
+        for (db, _guard) in backends().await {
+            let m = NewMaze {
+                name: "one",
+                hash: "h",
+                dim: 2,
+                layout: "2\n3,6\n9,12\n",
+                hidden: true,
+                optimum: Some(1),
+            };
+            let row = db.insert_maze(&m).await.unwrap();
+            assert!(row.hidden);
+            let again = db
+                .insert_maze(&NewMaze {
+                    name: "two",
+                    ..m.clone()
+                })
+                .await;
+            match again {
+                Err(StorageError::Conflict(msg)) => {
+                    assert!(msg.contains(&format!("maze {}", row.maze_id)))
+                }
+                other => panic!("{other:?}"),
             }
-            other => panic!("{other:?}"),
+            assert_eq!(db.count_mazes().await.unwrap(), 1);
+            assert_eq!(
+                db.get_maze(row.maze_id).await.unwrap().unwrap().layout,
+                m.layout
+            );
         }
-        assert_eq!(db.count_mazes().await.unwrap(), 1);
-        assert_eq!(
-            db.get_maze(row.maze_id).await.unwrap().unwrap().layout,
-            m.layout
-        );
     }
 }

@@ -1,9 +1,14 @@
-//! Storage: the only code with SQL. A SQLite database through sqlx, its schema in
-//! `migrations/` (embedded, applied at open). The API, the CLI and the workers call the
-//! typed functions of the submodules; nothing else writes SQL.
+//! Storage: the only code with SQL. One set of typed functions over two backends, chosen
+//! by the database URL at open: SQLite (`sqlite://...`, the embedded default) and
+//! PostgreSQL (`postgres://...`, for servers and workers on several machines). Both go
+//! through sqlx's runtime-chosen driver; each has its schema in `migrations/sqlite` and
+//! `migrations/postgres` (embedded, applied at open), migration for migration in step.
+//! The API, the CLI and the workers call the functions of the submodules; nothing else
+//! writes SQL.
 //!
-//! The functions take plain values and return plain rows, so that another backend
-//! (PostgreSQL, for workers on several machines) can be added behind the same calls.
+//! The SQL is written once for both where it can be (numbered `$1` parameters, which
+//! SQLite reads too; explicit casts where PostgreSQL's types would differ); the few
+//! statements that must differ ask [`Storage::backend`].
 
 pub mod bots;
 pub mod builds;
@@ -13,12 +18,13 @@ pub mod mazes;
 pub mod records;
 pub mod retries;
 pub mod tournaments;
+pub mod workers;
 
 use std::str::FromStr;
 use std::time::Duration;
 
-use sqlx::SqlitePool;
-use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
+use sqlx::any::{AnyConnectOptions, AnyPoolOptions};
+use sqlx::{AnyPool, Executor};
 
 /// How long a statement waits for another connection's write lock before failing.
 pub const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
@@ -64,58 +70,144 @@ pub enum StorageError {
 /// Result alias for storage calls.
 pub type Result<T, E = StorageError> = std::result::Result<T, E>;
 
+/// Which database a [`Storage`] talks to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    /// SQLite: one file, one machine.
+    Sqlite,
+    /// PostgreSQL: many servers and workers on one database.
+    Postgres,
+}
+
+impl Backend {
+    /// The backend a database URL names, if any.
+    pub fn of_url(url: &str) -> Option<Backend> {
+        if url.starts_with("sqlite:") {
+            Some(Backend::Sqlite)
+        } else if url.starts_with("postgres://") || url.starts_with("postgresql://") {
+            Some(Backend::Postgres)
+        } else {
+            None
+        }
+    }
+}
+
 /// A handle on the database; cheap to clone.
 #[derive(Debug, Clone)]
 pub struct Storage {
-    pool: SqlitePool,
+    pool: AnyPool,
+    backend: Backend,
     /// SQLite lets one connection write at a time, and a writer that finds the database
     /// busy sleeps (1, 2, 5 ms and on) before it tries again. The match workers' writes
     /// (claims, leases, records) queue here instead, so no worker sleeps on the
-    /// database while its core idles.
+    /// database while its core idles. (PostgreSQL writers do not wait on each other.)
     writes: std::sync::Arc<tokio::sync::Mutex<()>>,
 }
 
 impl Storage {
-    /// Opens (creating it if missing) the SQLite database at `url`, e.g.
-    /// `sqlite://mazearena.db`, in WAL mode with foreign keys on, and applies the
-    /// migrations.
+    /// Opens the database at `url` and applies the migrations: `sqlite://FILE` (made if
+    /// missing; WAL mode, foreign keys on) or `postgres://USER@HOST/DB`.
     ///
     /// # Errors
-    /// A malformed URL, a file that cannot be opened, or a failed migration.
+    /// A malformed or unknown URL, a database that cannot be reached or opened, or a
+    /// failed migration.
     pub async fn open(url: &str) -> Result<Storage> {
-        let options = SqliteConnectOptions::from_str(url)
-            .map_err(|source| StorageError::Url {
-                url: url.to_string(),
-                source,
-            })?
-            .create_if_missing(true)
-            .journal_mode(SqliteJournalMode::Wal)
-            .synchronous(SqliteSynchronous::Normal)
-            .foreign_keys(true)
-            .busy_timeout(BUSY_TIMEOUT);
-        let pool = SqlitePoolOptions::new()
-            .max_connections(8)
-            .acquire_timeout(Duration::from_secs(30))
-            .connect_with(options)
-            .await?;
-        sqlx::migrate!().run(&pool).await?;
-        let storage = Storage {
-            pool,
-            writes: std::sync::Arc::default(),
+        sqlx::any::install_default_drivers();
+        let bad_url = |source: sqlx::Error| StorageError::Url {
+            url: url.to_string(),
+            source,
+        };
+        let backend = Backend::of_url(url).ok_or_else(|| {
+            bad_url(sqlx::Error::Configuration(
+                "the database URL must start with sqlite:// or postgres://".into(),
+            ))
+        })?;
+        let storage = match backend {
+            Backend::Sqlite => {
+                // Made if missing, unless the URL says otherwise.
+                let url = if url.contains("mode=") {
+                    url.to_string()
+                } else if url.contains('?') {
+                    format!("{url}&mode=rwc")
+                } else {
+                    format!("{url}?mode=rwc")
+                };
+                let options = AnyConnectOptions::from_str(&url).map_err(bad_url)?;
+                let pool = AnyPoolOptions::new()
+                    .max_connections(8)
+                    .acquire_timeout(Duration::from_secs(30))
+                    .after_connect(|conn, _| {
+                        Box::pin(async move {
+                            conn.execute(sqlite_pragmas().as_str()).await?;
+                            Ok(())
+                        })
+                    })
+                    .connect_with(options)
+                    .await?;
+                sqlx::migrate!("migrations/sqlite").run(&pool).await?;
+                Storage {
+                    pool,
+                    backend,
+                    writes: std::sync::Arc::default(),
+                }
+            }
+            Backend::Postgres => {
+                let options = AnyConnectOptions::from_str(url).map_err(bad_url)?;
+                let pool = AnyPoolOptions::new()
+                    .max_connections(16)
+                    .acquire_timeout(Duration::from_secs(30))
+                    .connect_with(options)
+                    .await?;
+                sqlx::migrate!("migrations/postgres").run(&pool).await?;
+                Storage {
+                    pool,
+                    backend,
+                    writes: std::sync::Arc::default(),
+                }
+            }
         };
         storage.convert_inline_records().await?;
         Ok(storage)
     }
 
     /// The connection pool (for the submodules).
-    pub(crate) fn pool(&self) -> &SqlitePool {
+    pub(crate) fn pool(&self) -> &AnyPool {
         &self.pool
     }
 
+    /// The database this storage talks to.
+    pub fn backend(&self) -> Backend {
+        self.backend
+    }
+
     /// Waits for this process's turn to write (see [`Storage::writes`]); the turn lasts
-    /// as long as the guard.
-    pub(crate) async fn write_turn(&self) -> tokio::sync::MutexGuard<'_, ()> {
-        self.writes.lock().await
+    /// as long as the guard. PostgreSQL needs no turn.
+    pub(crate) async fn write_turn(&self) -> Option<tokio::sync::MutexGuard<'_, ()>> {
+        match self.backend {
+            Backend::Sqlite => Some(self.writes.lock().await),
+            Backend::Postgres => None,
+        }
+    }
+
+    /// The tables of the schema and the columns of each, sorted (for comparing the two
+    /// backends' schemas).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn schema_columns(&self) -> Result<Vec<(String, String)>> {
+        let sql = match self.backend {
+            Backend::Sqlite => {
+                "select m.name, p.name from sqlite_master m, pragma_table_info(m.name) p
+                 where m.type = 'table' and m.name not like 'sqlite_%' and m.name not like '_sqlx%'
+                 order by 1, 2"
+            }
+            Backend::Postgres => {
+                "select table_name::text, column_name::text from information_schema.columns
+                 where table_schema = 'public' and table_name not like '_sqlx%'
+                 order by 1, 2"
+            }
+        };
+        Ok(sqlx::query_as(sql).fetch_all(&self.pool).await?)
     }
 
     /// Checks that the database answers.
@@ -140,20 +232,114 @@ pub fn now_ms() -> i64 {
         .map_or(0, |d| d.as_millis() as i64)
 }
 
+/// A flag column (0 or 1: both backends store flags as integers), read as a `bool` with
+/// `#[sqlx(try_from = "Flag")]`.
+pub(crate) struct Flag(bool);
+
+impl sqlx::Type<sqlx::Any> for Flag {
+    fn type_info() -> sqlx::any::AnyTypeInfo {
+        <i64 as sqlx::Type<sqlx::Any>>::type_info()
+    }
+
+    fn compatible(ty: &sqlx::any::AnyTypeInfo) -> bool {
+        <i64 as sqlx::Type<sqlx::Any>>::compatible(ty)
+    }
+}
+
+impl<'r> sqlx::Decode<'r, sqlx::Any> for Flag {
+    fn decode(value: sqlx::any::AnyValueRef<'r>) -> Result<Flag, sqlx::error::BoxDynError> {
+        Ok(Flag(<i64 as sqlx::Decode<sqlx::Any>>::decode(value)? != 0))
+    }
+}
+
+impl From<Flag> for bool {
+    fn from(flag: Flag) -> bool {
+        flag.0
+    }
+}
+
+/// The settings each SQLite connection starts with.
+fn sqlite_pragmas() -> String {
+    format!(
+        "pragma journal_mode = wal; pragma synchronous = normal; pragma foreign_keys = on;
+         pragma busy_timeout = {};",
+        BUSY_TIMEOUT.as_millis()
+    )
+}
+
 /// Whether an error is a unique-constraint violation.
 pub(crate) fn is_unique_violation(e: &sqlx::Error) -> bool {
     matches!(e, sqlx::Error::Database(db) if db.is_unique_violation())
 }
 
 #[cfg(test)]
+mod tests {
+    use super::test_support::backends;
+
+    #[tokio::test]
+    async fn both_backends_have_the_same_tables_and_columns() {
+        let all = backends().await;
+        let mut schemas = Vec::new();
+        for (db, _guard) in &all {
+            schemas.push(db.schema_columns().await.unwrap());
+        }
+        assert!(schemas[0].len() > 40, "{:?}", schemas[0]);
+        for other in &schemas[1..] {
+            assert_eq!(&schemas[0], other);
+        }
+    }
+}
+
+#[cfg(test)]
 pub(crate) mod test_support {
     use super::Storage;
 
-    /// A fresh database in a temporary directory (kept alive by the returned guard).
+    /// A fresh SQLite database in a temporary directory (kept alive by the guard).
     pub async fn fresh() -> (Storage, tempfile::TempDir) {
         let dir = tempfile::tempdir().unwrap();
         let url = format!("sqlite://{}", dir.path().join("test.db").display());
         (Storage::open(&url).await.unwrap(), dir)
+    }
+
+    /// A fresh database on each backend, for a test to run on both: SQLite, then
+    /// PostgreSQL (a new database in the cluster `MAZEARENA_TEST_POSTGRES` names; see
+    /// `.ci/postgres.sh`). Without that cluster the PostgreSQL half is skipped with a
+    /// printed reason, except in CI (`CI=true`), where it fails.
+    pub async fn backends() -> Vec<(Storage, Option<tempfile::TempDir>)> {
+        let (sqlite, dir) = fresh().await;
+        let mut all = vec![(sqlite, Some(dir))];
+        match std::env::var("MAZEARENA_TEST_POSTGRES") {
+            Ok(url) => all.push((fresh_postgres(&url).await, None)),
+            Err(_) if std::env::var("CI").is_ok_and(|v| v == "true") => {
+                panic!("CI=true but MAZEARENA_TEST_POSTGRES is not set: .ci/run starts PostgreSQL")
+            }
+            Err(_) => eprintln!(
+                "skipping the PostgreSQL half: MAZEARENA_TEST_POSTGRES is not set \
+                 (eval \"$(.ci/postgres.sh start /tmp/mazearena-pg)\" starts a cluster)"
+            ),
+        }
+        all
+    }
+
+    /// A new, empty database in the PostgreSQL cluster at `url`, opened.
+    pub async fn fresh_postgres(url: &str) -> Storage {
+        use sqlx::Connection;
+        static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        sqlx::any::install_default_drivers();
+        let name = format!(
+            "unit_{}_{}_{}",
+            std::process::id(),
+            super::now_ms(),
+            NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        );
+        let mut admin = sqlx::AnyConnection::connect(url).await.unwrap();
+        sqlx::query(&format!("create database {name}"))
+            .execute(&mut admin)
+            .await
+            .unwrap();
+        admin.close().await.unwrap();
+        let (base, _) = url.rsplit_once('/').unwrap();
+        Storage::open(&format!("{base}/{name}")).await.unwrap()
     }
 
     /// The layout of the maze of [`bot_and_maze`].

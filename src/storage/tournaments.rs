@@ -44,7 +44,7 @@ impl Storage {
         let mut tx = self.pool().begin().await?;
         let now = now_ms();
         let id: i64 = sqlx::query_scalar(
-            "insert into tournament (name, repeats, created_at) values (?, ?, ?) returning tournament_id",
+            "insert into tournament (name, repeats, created_at) values ($1, $2, $3) returning tournament_id",
         )
         .bind(name)
         .bind(repeats)
@@ -57,7 +57,7 @@ impl Storage {
                 for &bot_version_id in bot_version_ids {
                     sqlx::query(
                         "insert into match (bot_version_id, maze_id, seed, tournament_id, repeat, priority, created_at)
-                         values (?, ?, ?, ?, ?, ?, ?)",
+                         values ($1, $2, $3, $4, $5, $6, $7)",
                     )
                     .bind(bot_version_id)
                     .bind(maze_id)
@@ -84,7 +84,7 @@ impl Storage {
     /// Database failures.
     pub async fn get_tournament(&self, tournament_id: i64) -> Result<Option<TournamentRow>> {
         Ok(
-            sqlx::query_as(&format!("{TOURNAMENT_SELECT} where t.tournament_id = ?"))
+            sqlx::query_as(&format!("{TOURNAMENT_SELECT} where t.tournament_id = $1"))
                 .bind(tournament_id)
                 .fetch_optional(self.pool())
                 .await?,
@@ -97,7 +97,7 @@ impl Storage {
     /// Database failures.
     pub async fn list_tournaments(&self, page: Page) -> Result<(Vec<TournamentRow>, i64)> {
         let rows = sqlx::query_as(&format!(
-            "{TOURNAMENT_SELECT} order by t.tournament_id desc limit ? offset ?"
+            "{TOURNAMENT_SELECT} order by t.tournament_id desc limit $1 offset $2"
         ))
         .bind(page.limit)
         .bind(page.offset)

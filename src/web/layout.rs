@@ -24,6 +24,7 @@ pub fn page(title: &str, body: Markup) -> String {
                     a href="/matches" { "Matches" }
                     a href="/bots" { "Bots" }
                     a href="/mazes" { "Mazes" }
+                    a href="/workers" { "Workers" }
                     a href="/api/openapi.json" { "API" }
                 }
                 main { (body) }

@@ -40,6 +40,7 @@ pub(super) fn router() -> Router<AppState> {
         .route("/matches/{id}", get(match_page))
         .route("/tournaments", get(tournaments_page))
         .route("/tournaments/{id}", get(tournament_page))
+        .route("/workers", get(workers_page))
 }
 
 async fn bots_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
@@ -229,6 +230,15 @@ async fn match_page(
 struct ListQuery {
     offset: Option<i64>,
     limit: Option<i64>,
+}
+
+async fn workers_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
+    let rows = state
+        .storage
+        .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
+        .await?;
+    let queued = state.storage.queued_count().await?;
+    Ok(Html(web::workers(&rows, queued)))
 }
 
 async fn tournaments_page(

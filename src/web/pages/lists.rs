@@ -8,6 +8,7 @@ use crate::storage::bots::BotRow;
 use crate::storage::matches::{MatchCount, MatchRow};
 use crate::storage::mazes::MazeRow;
 use crate::storage::tournaments::TournamentRow;
+use crate::storage::workers::WorkerRow;
 
 /// A list page of tournaments.
 pub fn tournaments(rows: &[TournamentRow], pager: &Pager) -> String {
@@ -39,6 +40,41 @@ pub fn bots(rows: &[BotRow]) -> String {
                                 td.num { (b.version) }
                                 td { @if b.is_paused() { (status("paused")) } @else { (status(&b.build_status)) } }
                                 td { (time(b.created_at)) }
+                            }
+                        }
+                    }
+                }
+            }
+        },
+    )
+}
+
+/// The page of the processes playing matches, as they last reported themselves.
+pub fn workers(rows: &[WorkerRow], queued: i64) -> String {
+    page(
+        "Workers",
+        html! {
+            h1 { "Workers" }
+            p.muted { (queued) " matches queued. Workers that reported in the last 30 seconds:" }
+            @if rows.is_empty() { p.muted { "No worker is playing matches." } } @else {
+                table.data.workers {
+                    thead { tr {
+                        th { "worker" } th { "role" } th { "host" } th.num { "pid" }
+                        th.num { "jobs" } th { "sandbox" } th.num { "matches" }
+                        th { "started" } th { "last seen" }
+                    } }
+                    tbody {
+                        @for w in rows {
+                            tr {
+                                td { code { (w.worker_id) } }
+                                td { (w.role) }
+                                td { (w.host) }
+                                td.num { (w.pid) }
+                                td.num { (w.jobs) }
+                                td { (status(&w.sandbox)) }
+                                td.num { (w.matches_done) }
+                                td { (time(w.started_at)) }
+                                td { (time(w.last_seen)) }
                             }
                         }
                     }

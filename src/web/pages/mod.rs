@@ -11,4 +11,6 @@ mod lists;
 
 pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
 pub use detail::{BotPage, Cell, MatchPage, TournamentPage, bot, match_page, maze, tournament};
-pub use lists::{MatchLine, MatchPager, Pager, bots, match_table, matches, mazes, tournaments};
+pub use lists::{
+    MatchLine, MatchPager, Pager, bots, match_table, matches, mazes, tournaments, workers,
+};

@@ -1,0 +1,100 @@
+//! `mazearena worker`: a process that only plays matches. It claims queued matches from
+//! the database the servers use, plays them in the sandbox, writes their records, and
+//! reports itself in the worker table; any number of them, on any machines, share one
+//! PostgreSQL database (or, on the server's own machine, its SQLite file).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Args;
+use tokio::sync::Notify;
+use tokio_util::task::TaskTracker;
+
+use super::serve::{finish, hidden_paths, jobs_on_this_machine, wait_for_signal};
+use crate::runner::Limits;
+use crate::storage::Storage;
+use crate::worker::{self, Shutdown, WorkerConfig};
+
+/// Settings of `mazearena worker`; every flag can also come from its `MAZEARENA_*` variable.
+#[derive(Debug, Args)]
+pub struct WorkerArgs {
+    /// The servers' database: `postgres://USER:PASSWORD@HOST/DB`, or `sqlite://FILE` on
+    /// the server's own machine.
+    #[arg(long, env = "MAZEARENA_DATABASE")]
+    database: String,
+    /// Where the bots' files are: the servers' data directory.
+    #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
+    data_dir: PathBuf,
+    /// Matches played at once, at most one per core (default: the number of cores).
+    #[arg(long, env = "MAZEARENA_JOBS")]
+    jobs: Option<usize>,
+    /// Lease on a running match, in seconds: if this worker dies, its matches go back to
+    /// the queue this long after their last renewal.
+    #[arg(long, env = "MAZEARENA_LEASE_SECS", default_value_t = worker::DEFAULT_LEASE.as_secs())]
+    lease_secs: u64,
+    /// On SIGINT/SIGTERM, how long running matches may take to finish before they are
+    /// stopped and re-queued, in seconds.
+    #[arg(long, env = "MAZEARENA_SHUTDOWN_GRACE_SECS", default_value_t = 10)]
+    shutdown_grace_secs: u64,
+    #[command(flatten)]
+    sandbox: super::sandbox::SandboxArgs,
+}
+
+/// Plays matches until SIGINT or SIGTERM.
+///
+/// # Errors
+/// When the database or the data directory cannot be used, or the sandbox cannot be had.
+pub fn run(args: WorkerArgs) -> anyhow::Result<()> {
+    let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
+    runtime.block_on(work(args))
+}
+
+async fn work(args: WorkerArgs) -> anyhow::Result<()> {
+    let data_dir = std::path::absolute(&args.data_dir)
+        .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
+    let sandbox = args
+        .sandbox
+        .open(&hidden_paths(&data_dir, &args.database))
+        .context("refusing to play matches without the sandbox")?;
+    let storage = Storage::open(&args.database)
+        .await
+        .with_context(|| format!("cannot open the database {}", args.database))?;
+    let jobs = jobs_on_this_machine(args.jobs, 1);
+    let level = sandbox.level();
+    let shutdown = Shutdown::default();
+    let tracker = TaskTracker::new();
+    let pool = worker::spawn_workers(
+        &tracker,
+        storage.clone(),
+        WorkerConfig {
+            jobs,
+            lease: Duration::from_secs(args.lease_secs.max(1)),
+            limits: Limits::default(),
+            sandbox,
+            only_tournament: None,
+            exit_when_idle: false,
+            report_as: Some("worker"),
+        },
+        None,
+        Arc::new(Notify::new()),
+        shutdown.clone(),
+        None,
+    );
+    tracker.close();
+    eprintln!("mazearena worker playing matches ({jobs} at once, sandbox {level})");
+    wait_for_signal().await;
+    tracing::info!("shutting down: no new matches are started");
+    shutdown.stop_claiming.cancel();
+    finish(
+        &storage,
+        &tracker,
+        &shutdown,
+        Some(&pool),
+        Duration::from_secs(args.shutdown_grace_secs),
+    )
+    .await;
+    eprintln!("mazearena worker stopped");
+    Ok(())
+}
