@@ -4,6 +4,8 @@
 #
 #   eval "$(.ci/postgres.sh start DIR)"   starts a cluster in DIR (made, owned by postgres)
 #                                         and prints `export MAZEARENA_TEST_POSTGRES=URL`
+#   .ci/postgres.sh restart DIR           stops it at once (as a crash would) and starts it
+#                                         again on the same port
 #   .ci/postgres.sh stop DIR              stops it (fast shutdown) and removes DIR
 #
 # The URL names the `postgres` superuser (trust authentication on 127.0.0.1 only), so a
@@ -35,6 +37,13 @@ start)
     -o "-p $port -c listen_addresses=127.0.0.1 -k $dir -c max_connections=200 -c fsync=off" start >/dev/null
   echo "$port" >"$dir/port"
   echo "export MAZEARENA_TEST_POSTGRES=postgres://postgres@127.0.0.1:$port/postgres"
+  echo "export MAZEARENA_TEST_POSTGRES_DIR=$dir"
+  ;;
+restart)
+  as_postgres "$bindir/pg_ctl" -D "$dir/data" -m immediate -w stop >/dev/null
+  port=$(cat "$dir/port")
+  as_postgres "$bindir/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w \
+    -o "-p $port -c listen_addresses=127.0.0.1 -k $dir -c max_connections=200 -c fsync=off" start >/dev/null
   ;;
 stop)
   if [ -d "$dir/data" ]; then
@@ -43,7 +52,7 @@ stop)
   rm -rf "$dir"
   ;;
 *)
-  echo "usage: $0 start|stop DIR" >&2
+  echo "usage: $0 start|restart|stop DIR" >&2
   exit 2
   ;;
 esac

@@ -5,6 +5,7 @@ mod authors;
 mod bots;
 mod browser;
 mod cli;
+mod faults;
 mod hostile;
 mod mazefiles;
 mod pages;
