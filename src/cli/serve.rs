@@ -235,15 +235,18 @@ pub(super) async fn finish(
     storage.close().await;
 }
 
-/// Stores the shipped mazes as public mazes when the database has none.
+/// Stores the shipped mazes as public mazes when the database has none (servers that
+/// start together on one database may both try: a maze already stored is skipped).
 async fn load_default_mazes(storage: &Storage) -> anyhow::Result<()> {
     if storage.count_mazes().await? > 0 {
         return Ok(());
     }
     for (name, text) in DEFAULT_MAZES {
-        api::mazes::store_maze(storage, name, text.as_bytes(), false)
-            .await
-            .map_err(|e| anyhow::anyhow!("cannot load the default maze {name}: {e}"))?;
+        match api::mazes::store_maze(storage, name, text.as_bytes(), false).await {
+            // Another server sharing the database stored it first.
+            Ok(_) | Err(api::error::ApiError::Conflict(_)) => {}
+            Err(e) => anyhow::bail!("cannot load the default maze {name}: {e}"),
+        }
     }
     Ok(())
 }

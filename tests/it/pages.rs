@@ -65,6 +65,7 @@ async fn pages_and_lists_answer_bad_input_with_json_4xx() {
         "/mazes/1",
         "/matches",
         "/tournaments",
+        "/workers",
     ] {
         let resp = server
             .client()
@@ -87,6 +88,45 @@ async fn pages_and_lists_answer_bad_input_with_json_4xx() {
         "the list routes are documented"
     );
     assert!(doc["paths"]["/api/tournaments"]["get"].is_object());
+}
+
+#[tokio::test]
+async fn the_server_reports_its_workers_in_health_metrics_and_pages() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "1"]);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let worker = loop {
+        let (s, health) = server.get("/healthz", None).await;
+        assert_eq!(s, 200, "{health}");
+        if let Some(w) = health["workers"].as_array().and_then(|a| a.first()) {
+            break w.clone();
+        }
+        assert!(std::time::Instant::now() < deadline, "{health}");
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    };
+    assert_eq!(worker["role"], "serve");
+    assert_eq!(worker["jobs"], 1);
+    assert_eq!(worker["pid"], server.pid());
+    let id = worker["worker_id"].as_str().unwrap();
+    let html = page(&server, "/workers").await;
+    assert!(html.contains(id), "{html}");
+    let metrics = server
+        .client()
+        .get(format!("{}/metrics", server.base))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    assert!(
+        metrics
+            .lines()
+            .any(|l| l.starts_with("mazearena_worker_jobs{")
+                && l.contains(id)
+                && l.ends_with(" 1")),
+        "{metrics}"
+    );
 }
 
 #[tokio::test]
