@@ -90,14 +90,75 @@ pub fn openapi() -> &'static utoipa::openapi::OpenApi {
 
 /// All routes with their OpenAPI description.
 pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
-    OpenApiRouter::with_openapi(ApiDoc::openapi())
+    let (router, mut doc) = OpenApiRouter::with_openapi(ApiDoc::openapi())
         .merge(bots::router())
         .merge(mazes::router())
         .merge(matches::router())
         .merge(tournaments::router())
         .merge(leaderboard::router())
         .merge(system::router())
-        .split_for_parts()
+        .split_for_parts();
+    document_input_errors(&mut doc);
+    (router, doc)
+}
+
+/// Adds to every operation the JSON errors that any route answers to bad input, so that
+/// the document lists every status a client can get: 400 for a malformed id or query
+/// parameter (or body), and for a request body also 413 (too large), 415 (not the
+/// content type asked for) and 422 (well-formed but invalid values).
+fn document_input_errors(doc: &mut utoipa::openapi::OpenApi) {
+    use utoipa::openapi::{ContentBuilder, Ref, RefOr, ResponseBuilder};
+    let error = |description: &str| {
+        RefOr::T(
+            ResponseBuilder::new()
+                .description(description)
+                .content(
+                    "application/json",
+                    ContentBuilder::new()
+                        .schema(Some(Ref::from_schema_name("ErrorBody")))
+                        .build(),
+                )
+                .build(),
+        )
+    };
+    for item in doc.paths.paths.values_mut() {
+        for op in [
+            &mut item.get,
+            &mut item.post,
+            &mut item.put,
+            &mut item.patch,
+            &mut item.delete,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            let has_params = op.parameters.as_ref().is_some_and(|p| !p.is_empty());
+            let has_body = op.request_body.is_some();
+            let mut add = |code: &str, description: &str| {
+                op.responses
+                    .responses
+                    .entry(code.to_string())
+                    .or_insert_with(|| error(description));
+            };
+            if has_params || has_body {
+                add(
+                    "400",
+                    "Bad request: a malformed id, query parameter or body",
+                );
+            }
+            if has_body {
+                add("413", "The request body is too large");
+                add(
+                    "415",
+                    "The request body is not of a content type the route takes",
+                );
+                add(
+                    "422",
+                    "The request body is well-formed but its values are invalid",
+                );
+            }
+        }
+    }
 }
 
 /// The application: routes, JSON fallbacks and the middleware stack.

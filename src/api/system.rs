@@ -56,7 +56,8 @@ async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>>
 
 /// Prometheus metrics: matches by status, queue depth, match duration histogram.
 #[utoipa::path(get, path = "/metrics", tag = "system",
-    responses((status = 200, description = "Prometheus text format", content_type = "text/plain")))]
+    responses((status = 200, description = "Prometheus metrics in the OpenMetrics text format",
+        content_type = "application/openmetrics-text; version=1.0.0; charset=utf-8")))]
 async fn metrics(State(state): State<AppState>) -> ApiResult<Response> {
     let text = state.metrics.render(&state.storage).await?;
     Ok((
