@@ -6,7 +6,8 @@
 #   bash benches/run.sh --quick    (a few minutes: fewer runs, smaller databases and
 #                                   samples; to check the scripts, not for the figures)
 #
-# Needs gcc, python3, bubblewrap and wrk (`apt-get install -y bubblewrap wrk`),
+# Needs gcc, python3, bubblewrap, wrk and PostgreSQL's server binaries
+# (`apt-get install -y bubblewrap wrk postgresql`),
 # and ../shared/mazes beside the checkout. Run it on a quiet machine:
 # the figures are medians of runs taken in turn, but a busy core still shows.
 set -euo pipefail
@@ -14,10 +15,10 @@ cd "$(dirname "$0")/.."
 QUICK=${1:-}
 if [ "$QUICK" = --quick ]; then
   RUNS=3 STEP_RUNS=3 PAGE_SIZES="1000" PAGE_RUNS=5 EVERY=17 T_RUNS=1 OVERHEAD=5
-  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1
+  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1 WORKER_ARGS=(1 2)
 else
   RUNS=5 STEP_RUNS=11 PAGE_SIZES="1000 100000 1000000" PAGE_RUNS=21 EVERY=1 T_RUNS=3 OVERHEAD=20
-  HTTP_ARGS=() ADAPTER_RUNS=11
+  HTTP_ARGS=() ADAPTER_RUNS=11 WORKER_ARGS=(3 12)
 fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
@@ -87,6 +88,9 @@ log "the original tester's way against the adapter"
 
 log "tournaments"
 { bash benches/tournament.sh "$T_RUNS"; echo; } >>"$out"
+
+log "throughput across worker processes on PostgreSQL"
+{ bash benches/workers.sh "${WORKER_ARGS[@]}"; echo; } >>"$out"
 
 log "the sandbox's cost per match"
 {

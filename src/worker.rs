@@ -1,5 +1,6 @@
-//! Match workers: a pool of threads, each pinned to a core of its own (see
-//! [`runner::affinity`]), that claim queued matches from the database with a lease, play
+//! Match workers: a pool of threads, each pinned to a core of its own (claimed from
+//! the other mazearena processes on the machine: see [`runner::affinity`]), that claim
+//! queued matches from the database with a lease, play
 //! them with the runner, and write each record in one transaction.
 //!
 //! Used by the server and by `mazearena tournament`. A worker keeps its lease alive while
@@ -95,7 +96,10 @@ pub fn spawn_workers(
 ) -> PoolHandle {
     let owner: Arc<str> = lease_owner_name().into();
     let done_count = Arc::new(AtomicI64::new(0));
-    let cores = runner::affinity::allowed_cores();
+    let mut cores = runner::affinity::claim_cores(config.jobs.max(1), &std::env::temp_dir())
+        .into_iter()
+        .map(Some)
+        .collect::<Vec<_>>();
     for k in 0..config.jobs.max(1) {
         let worker = Worker {
             storage: storage.clone(),
@@ -107,12 +111,14 @@ pub fn spawn_workers(
             on_done: on_done.clone(),
             done_count: done_count.clone(),
         };
-        let core = (!cores.is_empty()).then(|| cores[k % cores.len()]);
+        // The worker's thread holds its core's claim as long as it runs.
+        let claim = cores.get_mut(k).and_then(Option::take);
         let (done, finished) = tokio::sync::oneshot::channel::<()>();
         let thread = std::thread::Builder::new()
             .name(format!("match-worker-{k}"))
             .spawn(move || {
-                worker.run_on_core(core);
+                worker.run_on_core(claim.as_ref().map(|c| c.core));
+                drop(claim);
                 let _ = done.send(());
             });
         match thread {
