@@ -29,7 +29,7 @@ pub struct CoreClaim {
     /// The core.
     pub core: usize,
     /// The lock on it; `None` when every core was taken and this one is shared.
-    _lock: Option<std::fs::File>,
+    _lock: Option<nix::fcntl::Flock<std::fs::File>>,
 }
 
 /// Claims `n` of the allowed cores for match workers: first the cores no other
@@ -52,10 +52,11 @@ pub fn claim_cores(n: usize, lock_dir: &std::path::Path) -> Vec<CoreClaim> {
         else {
             continue;
         };
-        if file.try_lock().is_ok() {
+        if let Ok(lock) = nix::fcntl::Flock::lock(file, nix::fcntl::FlockArg::LockExclusiveNonblock)
+        {
             claims.push(CoreClaim {
                 core,
-                _lock: Some(file),
+                _lock: Some(lock),
             });
         }
     }
