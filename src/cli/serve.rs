@@ -46,10 +46,6 @@ pub struct ServeArgs {
     /// Where uploaded bots' files are kept.
     #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
     data_dir: PathBuf,
-    /// Match workers, at most one per core (default: the number of cores); 0 serves the
-    /// API only, leaving the matches to `mazearena worker` processes.
-    #[arg(long, env = "MAZEARENA_JOBS")]
-    jobs: Option<usize>,
     /// The admin token (uploading mazes, tournaments). If unset, one is generated and
     /// printed at start.
     #[arg(long, env = "MAZEARENA_ADMIN_TOKEN", hide_env_values = true)]
@@ -57,6 +53,20 @@ pub struct ServeArgs {
     /// The most matches that may wait in the queue; more are refused with 429.
     #[arg(long, env = "MAZEARENA_MAX_QUEUE", default_value_t = 10_000)]
     max_queue: i64,
+    #[command(flatten)]
+    pool: PoolArgs,
+    #[command(flatten)]
+    sandbox: super::sandbox::SandboxArgs,
+}
+
+/// The match workers' settings, shared by `serve` and `worker`.
+#[derive(Debug, Args)]
+pub(super) struct PoolArgs {
+    /// Matches played at once, at most one per core (default: the number of cores).
+    /// `serve --jobs 0` plays none: it serves the API only, leaving the matches to
+    /// `mazearena worker` processes.
+    #[arg(long, env = "MAZEARENA_JOBS")]
+    jobs: Option<usize>,
     /// Lease on a running match, in seconds: a match whose worker died is re-queued
     /// this long after its last renewal.
     #[arg(long, env = "MAZEARENA_LEASE_SECS", default_value_t = worker::DEFAULT_LEASE.as_secs())]
@@ -65,8 +75,45 @@ pub struct ServeArgs {
     /// stopped and re-queued, in seconds.
     #[arg(long, env = "MAZEARENA_SHUTDOWN_GRACE_SECS", default_value_t = 10)]
     shutdown_grace_secs: u64,
-    #[command(flatten)]
-    sandbox: super::sandbox::SandboxArgs,
+}
+
+impl PoolArgs {
+    /// The workers to run on this machine: `--jobs` (default: the number of cores), at
+    /// least `least`, at most one per core (said on stderr when lowered).
+    pub(super) fn jobs(&self, least: usize) -> usize {
+        let cores = worker::cores();
+        if self.jobs.is_some_and(|j| j > cores) {
+            eprintln!(
+                "--jobs {} lowered to {cores}: one bot process per core keeps timing fair",
+                self.jobs.unwrap_or(0)
+            );
+        }
+        self.jobs.unwrap_or(cores).clamp(least, cores)
+    }
+
+    /// The configuration of `jobs` workers that play every queued match in `sandbox`,
+    /// reported in the worker table as `role`.
+    pub(super) fn config(
+        &self,
+        jobs: usize,
+        sandbox: crate::runner::Sandbox,
+        role: &'static str,
+    ) -> WorkerConfig {
+        WorkerConfig {
+            jobs,
+            lease: Duration::from_secs(self.lease_secs.max(1)),
+            limits: Limits::default(),
+            sandbox,
+            only_tournament: None,
+            exit_when_idle: false,
+            report_as: Some(role),
+        }
+    }
+
+    /// The grace period of a graceful stop.
+    pub(super) fn grace(&self) -> Duration {
+        Duration::from_secs(self.shutdown_grace_secs)
+    }
 }
 
 /// Runs the server until SIGINT or SIGTERM.
@@ -113,7 +160,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             t
         }
     };
-    let jobs = jobs_on_this_machine(args.jobs, 0);
+    let jobs = args.pool.jobs(0);
     let metrics = Metrics::new();
     let wake = Arc::new(Notify::new());
     let state = AppState {
@@ -151,15 +198,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         worker::spawn_workers(
             &tracker,
             storage.clone(),
-            WorkerConfig {
-                jobs,
-                lease: Duration::from_secs(args.lease_secs.max(1)),
-                limits: Limits::default(),
-                sandbox,
-                only_tournament: None,
-                exit_when_idle: false,
-                report_as: Some("serve"),
-            },
+            args.pool.config(jobs, sandbox, "serve"),
             Some(metrics),
             wake,
             shutdown.clone(),
@@ -184,7 +223,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         &tracker,
         &shutdown,
         pool.as_ref(),
-        Duration::from_secs(args.shutdown_grace_secs),
+        args.pool.grace(),
     )
     .await;
     eprintln!("mazearena stopped");
@@ -200,19 +239,6 @@ pub(super) fn hidden_paths(data_dir: &std::path::Path, database: &str) -> Vec<Pa
         hide.push(std::path::absolute(file).unwrap_or_else(|_| file.into()));
     }
     hide
-}
-
-/// The match workers to run: `asked` (default: the number of cores), at least `least`,
-/// at most one per core (said on stderr when lowered).
-pub(super) fn jobs_on_this_machine(asked: Option<usize>, least: usize) -> usize {
-    let cores = worker::cores();
-    if asked.is_some_and(|j| j > cores) {
-        eprintln!(
-            "--jobs {} lowered to {cores}: one bot process per core keeps timing fair",
-            asked.unwrap_or(0)
-        );
-    }
-    asked.unwrap_or(cores).clamp(least, cores)
 }
 
 /// After a stop signal: gives the running matches `grace` to end, then stops and

@@ -5,17 +5,15 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::Context;
 use clap::Args;
 use tokio::sync::Notify;
 use tokio_util::task::TaskTracker;
 
-use super::serve::{finish, hidden_paths, jobs_on_this_machine, wait_for_signal};
-use crate::runner::Limits;
+use super::serve::{PoolArgs, finish, hidden_paths, wait_for_signal};
 use crate::storage::Storage;
-use crate::worker::{self, Shutdown, WorkerConfig};
+use crate::worker::{self, Shutdown};
 
 /// Settings of `mazearena worker`; every flag can also come from its `MAZEARENA_*` variable.
 #[derive(Debug, Args)]
@@ -27,17 +25,8 @@ pub struct WorkerArgs {
     /// Where the bots' files are: the servers' data directory.
     #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
     data_dir: PathBuf,
-    /// Matches played at once, at most one per core (default: the number of cores).
-    #[arg(long, env = "MAZEARENA_JOBS")]
-    jobs: Option<usize>,
-    /// Lease on a running match, in seconds: if this worker dies, its matches go back to
-    /// the queue this long after their last renewal.
-    #[arg(long, env = "MAZEARENA_LEASE_SECS", default_value_t = worker::DEFAULT_LEASE.as_secs())]
-    lease_secs: u64,
-    /// On SIGINT/SIGTERM, how long running matches may take to finish before they are
-    /// stopped and re-queued, in seconds.
-    #[arg(long, env = "MAZEARENA_SHUTDOWN_GRACE_SECS", default_value_t = 10)]
-    shutdown_grace_secs: u64,
+    #[command(flatten)]
+    pool: PoolArgs,
     #[command(flatten)]
     sandbox: super::sandbox::SandboxArgs,
 }
@@ -61,22 +50,14 @@ async fn work(args: WorkerArgs) -> anyhow::Result<()> {
     let storage = Storage::open(&args.database)
         .await
         .with_context(|| format!("cannot open the database {}", args.database))?;
-    let jobs = jobs_on_this_machine(args.jobs, 1);
+    let jobs = args.pool.jobs(1);
     let level = sandbox.level();
     let shutdown = Shutdown::default();
     let tracker = TaskTracker::new();
     let pool = worker::spawn_workers(
         &tracker,
         storage.clone(),
-        WorkerConfig {
-            jobs,
-            lease: Duration::from_secs(args.lease_secs.max(1)),
-            limits: Limits::default(),
-            sandbox,
-            only_tournament: None,
-            exit_when_idle: false,
-            report_as: Some("worker"),
-        },
+        args.pool.config(jobs, sandbox, "worker"),
         None,
         Arc::new(Notify::new()),
         shutdown.clone(),
@@ -92,7 +73,7 @@ async fn work(args: WorkerArgs) -> anyhow::Result<()> {
         &tracker,
         &shutdown,
         Some(&pool),
-        Duration::from_secs(args.shutdown_grace_secs),
+        args.pool.grace(),
     )
     .await;
     eprintln!("mazearena worker stopped");

@@ -357,6 +357,43 @@ fn args(list: &[&str]) -> Vec<String> {
     list.iter().map(|s| s.to_string()).collect()
 }
 
+/// Where one setting plays: its folder, bot files and server address.
+struct Site {
+    dir: PathBuf,
+    data: String,
+    base: String,
+    bind: String,
+}
+
+impl Site {
+    fn new(tmp: &Path, name: &str) -> Site {
+        let dir = tmp.join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        let port = free_port();
+        Site {
+            data: dir.join("data").display().to_string(),
+            dir,
+            base: format!("http://127.0.0.1:{port}"),
+            bind: format!("127.0.0.1:{port}"),
+        }
+    }
+
+    /// Stops `procs` gracefully, then checks the records of tournament `id` in
+    /// `database`, its standings against `want`, and that nothing was left running.
+    fn finish(&self, procs: &mut [Proc], database: &str, id: i64, want: &[Row], what: &str) {
+        for p in procs.iter_mut() {
+            p.terminate();
+        }
+        let runtime = tokio::runtime::Runtime::new().unwrap();
+        let got = runtime.block_on(check_records(database, id));
+        assert_same_standings(&got, want, what);
+        assert!(
+            processes_matching(&self.data).is_empty(),
+            "{what}: processes left behind"
+        );
+    }
+}
+
 #[test]
 fn tournaments_survive_killed_servers_workers_and_database() {
     let pg = postgres("tournaments_survive_killed_servers_workers_and_database");
@@ -368,52 +405,29 @@ fn tournaments_survive_killed_servers_workers_and_database() {
 
     // PostgreSQL: one API server, three workers; any of them killed, PostgreSQL restarted.
     if let Some((url, cluster)) = &pg {
-        let dir = tmp.path().join("pg");
-        std::fs::create_dir_all(&dir).unwrap();
+        let site = Site::new(tmp.path(), "pg");
         let database = runtime.block_on(new_database(url, "faults"));
-        let data = dir.join("data").display().to_string();
-        let port = free_port();
-        let base = format!("http://127.0.0.1:{port}");
-        let bind = format!("127.0.0.1:{port}");
-        let mut procs = vec![Proc::start(
-            "api",
-            args(&[
-                "serve",
-                "--jobs",
-                "0",
-                "--bind",
-                &bind,
-                "--database",
-                &database,
-                "--data-dir",
-                &data,
-                "--lease-secs",
-                LEASE_SECS,
-            ]),
-            &dir,
-        )];
+        let common = [
+            "--database",
+            &database,
+            "--data-dir",
+            &site.data,
+            "--lease-secs",
+            LEASE_SECS,
+        ];
+        let mut api = args(&["serve", "--jobs", "0", "--bind", &site.bind]);
+        api.extend(args(&common));
+        let mut procs = vec![Proc::start("api", api, &site.dir)];
         for w in 0..3 {
-            procs.push(Proc::start(
-                &format!("worker{w}"),
-                args(&[
-                    "worker",
-                    "--jobs",
-                    "1",
-                    "--database",
-                    &database,
-                    "--data-dir",
-                    &data,
-                    "--lease-secs",
-                    LEASE_SECS,
-                ]),
-                &dir,
-            ));
+            let mut worker = args(&["worker", "--jobs", "1"]);
+            worker.extend(args(&common));
+            procs.push(Proc::start(&format!("worker{w}"), worker, &site.dir));
         }
         let id = runtime.block_on(async {
-            wait_healthy(&client, &base).await;
-            let id = play_under_fire(&client, &base, &mut procs, Some(cluster), 11).await;
+            wait_healthy(&client, &site.base).await;
+            let id = play_under_fire(&client, &site.base, &mut procs, Some(cluster), 11).await;
             // The workers reported themselves; the killed ones' rows are stale.
-            let health = get(&client, &base, "/healthz").await.unwrap();
+            let health = get(&client, &site.base, "/healthz").await.unwrap();
             let live = health["workers"].as_array().unwrap();
             assert_eq!(
                 live.iter().filter(|w| w["role"] == "worker").count(),
@@ -422,49 +436,27 @@ fn tournaments_survive_killed_servers_workers_and_database() {
             );
             id
         });
-        for p in &mut procs {
-            p.terminate();
-        }
-        let got = runtime.block_on(check_records(&database, id));
-        assert_same_standings(&got, &want, "PostgreSQL under faults");
-        assert!(
-            processes_matching(&data).is_empty(),
-            "processes left behind"
-        );
+        site.finish(&mut procs, &database, id, &want, "PostgreSQL under faults");
     }
 
     // SQLite: one server with its own workers, killed ten times.
-    let dir = tmp.path().join("sqlite");
-    std::fs::create_dir_all(&dir).unwrap();
-    let database = format!("sqlite://{}", dir.join("mazearena.db").display());
-    let data = dir.join("data").display().to_string();
-    let port = free_port();
-    let base = format!("http://127.0.0.1:{port}");
-    let bind = format!("127.0.0.1:{port}");
-    let mut procs = vec![Proc::start(
-        "server",
-        args(&[
-            "serve",
-            "--bind",
-            &bind,
-            "--database",
-            &database,
-            "--data-dir",
-            &data,
-            "--lease-secs",
-            LEASE_SECS,
-        ]),
-        &dir,
-    )];
+    let site = Site::new(tmp.path(), "sqlite");
+    let database = format!("sqlite://{}/mazearena.db", site.dir.display());
+    let server = args(&[
+        "serve",
+        "--bind",
+        &site.bind,
+        "--database",
+        &database,
+        "--data-dir",
+        &site.data,
+        "--lease-secs",
+        LEASE_SECS,
+    ]);
+    let mut procs = vec![Proc::start("server", server, &site.dir)];
     let id = runtime.block_on(async {
-        wait_healthy(&client, &base).await;
-        play_under_fire(&client, &base, &mut procs, None, 7).await
+        wait_healthy(&client, &site.base).await;
+        play_under_fire(&client, &site.base, &mut procs, None, 7).await
     });
-    procs[0].terminate();
-    let got = runtime.block_on(check_records(&database, id));
-    assert_same_standings(&got, &want, "SQLite under faults");
-    assert!(
-        processes_matching(&data).is_empty(),
-        "processes left behind"
-    );
+    site.finish(&mut procs, &database, id, &want, "SQLite under faults");
 }
