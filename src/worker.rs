@@ -302,6 +302,42 @@ impl Worker {
         }
     }
 
+    /// Writes a played match's record; whether it was written. A database that does not
+    /// answer (restarting, unreachable) is tried again for about half a minute, so that
+    /// a played match is not lost to a short outage; if the lease expires meanwhile,
+    /// another worker has the match and this record is dropped (never written twice).
+    async fn write_record(
+        &self,
+        match_id: i64,
+        record: &runner::MatchRecord,
+        maze: &crate::engine::Maze,
+    ) -> bool {
+        const TRIES: u32 = 10;
+        for attempt in 1..=TRIES {
+            match self
+                .storage
+                .complete_match(match_id, &self.owner, record, maze)
+                .await
+            {
+                Ok(true) => return true,
+                Ok(false) => {
+                    tracing::warn!(
+                        "lease lost before the record was written; another worker has the match"
+                    );
+                    return false;
+                }
+                Err(e) if attempt < TRIES => {
+                    tracing::warn!(cause = %e, attempt, "could not write the match record; trying again");
+                    tokio::time::sleep(Duration::from_millis(500) * attempt).await;
+                }
+                Err(e) => {
+                    tracing::error!(cause = %e, "could not write the match record; it will be re-queued");
+                }
+            }
+        }
+        false
+    }
+
     #[tracing::instrument(skip_all, fields(match_id = job.match_id))]
     async fn play(&self, job: ClaimedMatch) {
         let maze = match mazefile::numeric::parse(job.layout.as_bytes()) {
@@ -337,18 +373,14 @@ impl Worker {
         loop {
             tokio::select! {
                 record = &mut game => {
-                    match self.storage.complete_match(job.match_id, &self.owner, &record, &maze).await {
-                        Ok(true) => {
-                            self.done_count.fetch_add(1, Ordering::Relaxed);
-                            if let Some(m) = &self.metrics {
-                                m.observe_match(started.elapsed());
-                            }
-                            if let Some(f) = &self.on_done {
-                                f(record.status);
-                            }
+                    if self.write_record(job.match_id, &record, &maze).await {
+                        self.done_count.fetch_add(1, Ordering::Relaxed);
+                        if let Some(m) = &self.metrics {
+                            m.observe_match(started.elapsed());
                         }
-                        Ok(false) => tracing::warn!("lease lost before the record was written; another worker has the match"),
-                        Err(e) => tracing::error!(cause = %e, "could not write the match record; it will be re-queued"),
+                        if let Some(f) = &self.on_done {
+                            f(record.status);
+                        }
                     }
                     return;
                 }

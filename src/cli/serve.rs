@@ -75,9 +75,20 @@ pub(super) struct PoolArgs {
     /// stopped and re-queued, in seconds.
     #[arg(long, env = "MAZEARENA_SHUTDOWN_GRACE_SECS", default_value_t = 10)]
     shutdown_grace_secs: u64,
+    /// How many times a match whose worker died while it ran is put back in the queue;
+    /// the next time it is recorded as `aborted` (a bot that brings its worker down is
+    /// not re-run forever). Raise it where workers are often stopped without a graceful
+    /// shutdown.
+    #[arg(long, env = "MAZEARENA_MAX_RETRIES", default_value_t = crate::storage::retries::MAX_MATCH_RETRIES)]
+    max_retries: i64,
 }
 
 impl PoolArgs {
+    /// `storage` with this pool's retry budget.
+    pub(super) fn storage(&self, storage: Storage) -> Storage {
+        storage.with_max_retries(self.max_retries)
+    }
+
     /// The workers to run on this machine: `--jobs` (default: the number of cores), at
     /// least `least`, at most one per core (said on stderr when lowered).
     pub(super) fn jobs(&self, least: usize) -> usize {
@@ -140,9 +151,11 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .sandbox
         .open(&hidden_paths(&data_dir, &args.database))
         .context("refusing to serve without the sandbox")?;
-    let storage = Storage::open(&args.database)
-        .await
-        .with_context(|| format!("cannot open the database {}", args.database))?;
+    let storage = args.pool.storage(
+        Storage::open(&args.database)
+            .await
+            .with_context(|| format!("cannot open the database {}", args.database))?,
+    );
     let requeued = storage.requeue_expired().await?;
     if requeued > 0 {
         tracing::warn!(

@@ -102,6 +102,8 @@ pub struct Storage {
     /// (claims, leases, records) queue here instead, so no worker sleeps on the
     /// database while its core idles. (PostgreSQL writers do not wait on each other.)
     writes: std::sync::Arc<tokio::sync::Mutex<()>>,
+    /// See [`Storage::with_max_retries`].
+    max_retries: i64,
 }
 
 impl Storage {
@@ -149,6 +151,7 @@ impl Storage {
                     pool,
                     backend,
                     writes: std::sync::Arc::default(),
+                    max_retries: retries::MAX_MATCH_RETRIES,
                 }
             }
             Backend::Postgres => {
@@ -163,11 +166,26 @@ impl Storage {
                     pool,
                     backend,
                     writes: std::sync::Arc::default(),
+                    max_retries: retries::MAX_MATCH_RETRIES,
                 }
             }
         };
         storage.convert_inline_records().await?;
         Ok(storage)
+    }
+
+    /// This storage with `retries` re-queues of a match whose lease expired (instead of
+    /// [`retries::MAX_MATCH_RETRIES`]) before its next expiry records it as `aborted`:
+    /// more for a deployment whose workers are often stopped without a graceful
+    /// shutdown (the match was not the cause), fewer to give up on a poison pill sooner.
+    pub fn with_max_retries(mut self, retries: i64) -> Storage {
+        self.max_retries = retries.max(0);
+        self
+    }
+
+    /// How many times a match whose lease expired is re-queued.
+    pub fn max_retries(&self) -> i64 {
+        self.max_retries
     }
 
     /// The connection pool (for the submodules).

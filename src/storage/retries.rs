@@ -1,6 +1,7 @@
 //! Retries of matches whose server died while they ran, and pausing the bots whose
 //! matches keep dying with their server: a match is re-queued after an expired lease
-//! at most [`MAX_MATCH_RETRIES`] times, then recorded as `aborted`, so a bot that brings
+//! at most [`MAX_MATCH_RETRIES`] times (or as [`Storage::with_max_retries`] says), then
+//! recorded as `aborted`, so a bot that brings
 //! its server down (a poison pill) is not re-run forever; a bot with
 //! [`PAUSE_AFTER_ABORTS`] such matches of one version is paused (`bots.rs`).
 
@@ -20,11 +21,11 @@ pub const MAX_MATCH_RETRIES: i64 = 2;
 /// accepted until an admin resumes it or a new version is uploaded.
 pub const PAUSE_AFTER_ABORTS: i64 = 2;
 
-/// The reason recorded with a match that used up its retries.
-pub fn retries_exhausted_reason() -> String {
+/// The reason recorded with a match that used up its `retries`.
+pub fn retries_exhausted_reason(retries: i64) -> String {
     format!(
         "the match was running each time the server stopped ({} attempts); it is not retried",
-        MAX_MATCH_RETRIES + 1
+        retries + 1
     )
 }
 
@@ -49,7 +50,9 @@ impl Storage {
     /// Database failures.
     pub async fn reap_expired(&self) -> Result<Reaped> {
         let now = now_ms();
-        let aborted_record = failure_record(MatchStatus::Aborted, &retries_exhausted_reason())?;
+        let retries = self.max_retries();
+        let aborted_record =
+            failure_record(MatchStatus::Aborted, &retries_exhausted_reason(retries))?;
         let mut tx = self.pool().begin().await?;
         // Write first, so the transaction holds the write lock from its start. In an
         // update every expression reads the row as it was before it.
@@ -62,7 +65,7 @@ impl Storage {
              where status = 'running' and lease_expires_at < $3
              returning match_id, status, bot_version_id",
         )
-        .bind(MAX_MATCH_RETRIES)
+        .bind(retries)
         .bind(&aborted_record)
         .bind(now)
         .fetch_all(&mut *tx)
@@ -80,7 +83,7 @@ impl Storage {
             }
         }
         for bot_version_id in versions {
-            if let Some(bot_id) = pause_if_aborting(&mut tx, bot_version_id, now).await? {
+            if let Some(bot_id) = pause_if_aborting(&mut tx, bot_version_id, now, retries).await? {
                 reaped.paused_bots.push(bot_id);
             }
         }
@@ -98,6 +101,7 @@ async fn pause_if_aborting(
     tx: &mut sqlx::AnyConnection,
     bot_version_id: i64,
     now: i64,
+    retries: i64,
 ) -> Result<Option<i64>> {
     let (bot_id, version, paused_at): (i64, i64, Option<i64>) = sqlx::query_as(
         "select b.bot_id, v.version, b.paused_at
@@ -117,7 +121,7 @@ async fn pause_if_aborting(
          order by m.match_id",
     )
     .bind(bot_version_id)
-    .bind(MAX_MATCH_RETRIES)
+    .bind(retries)
     .fetch_all(&mut *tx)
     .await?;
     if (aborted.len() as i64) < PAUSE_AFTER_ABORTS {
