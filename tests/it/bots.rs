@@ -91,6 +91,7 @@ fn each_starter_kits_minimal_bot_finishes_a_real_match() {
 
 #[test]
 fn every_manifest_finishes_the_classic_mazes_in_a_tournament() {
+    let _heavy = crate::support::heavy();
     let dir = tempfile::tempdir().unwrap();
     let db = format!("sqlite://{}", dir.path().join("bots.db").display());
     let kits: Vec<String> = available_kits()
@@ -149,6 +150,7 @@ fn every_manifest_finishes_the_classic_mazes_in_a_tournament() {
 
 #[test]
 fn the_champion_finishes_every_contest_maze_with_a_reachable_goal() {
+    let _heavy = crate::support::heavy();
     if !have("cargo") {
         eprintln!("SKIPPED the champion test: cargo is not installed");
         return;

@@ -401,6 +401,7 @@ impl Site {
 
 #[test]
 fn tournaments_survive_killed_servers_workers_and_database() {
+    let _heavy = crate::support::heavy();
     let pg = postgres("tournaments_survive_killed_servers_workers_and_database");
     let tmp = tempfile::tempdir().unwrap();
     let want = fault_free_standings(tmp.path());

@@ -9,6 +9,16 @@ use serde_json::{Value, json};
 use mazearena::engine::{Maze, mazefile};
 use mazearena::runner::{BotSpec, Sandbox};
 
+/// Taken by the tests that keep both cores busy for minutes (whole tournaments, the
+/// fault test), so that they run one after another rather than starve each other's
+/// bots past their time limits.
+pub fn heavy() -> std::sync::MutexGuard<'static, ()> {
+    static HEAVY: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    HEAVY
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// The crate root.
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
