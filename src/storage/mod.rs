@@ -26,6 +26,9 @@ use std::time::Duration;
 use sqlx::any::{AnyConnectOptions, AnyPoolOptions};
 use sqlx::{AnyPool, Executor};
 
+/// How long a process that starts waits for PostgreSQL to answer before it gives up.
+pub const CONNECT_PATIENCE: Duration = Duration::from_secs(30);
+
 /// How long a statement waits for another connection's write lock before failing.
 pub const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
 
@@ -156,11 +159,24 @@ impl Storage {
             }
             Backend::Postgres => {
                 let options = AnyConnectOptions::from_str(url).map_err(bad_url)?;
-                let pool = AnyPoolOptions::new()
-                    .max_connections(16)
-                    .acquire_timeout(Duration::from_secs(30))
-                    .connect_with(options)
-                    .await?;
+                // A server or worker may start while PostgreSQL does (or restarts): it
+                // waits for it a while rather than exit at once.
+                let since = std::time::Instant::now();
+                let pool = loop {
+                    match AnyPoolOptions::new()
+                        .max_connections(16)
+                        .acquire_timeout(Duration::from_secs(30))
+                        .connect_with(options.clone())
+                        .await
+                    {
+                        Ok(pool) => break pool,
+                        Err(e) if since.elapsed() < CONNECT_PATIENCE => {
+                            tracing::warn!(cause = %e, "PostgreSQL does not answer yet; trying again");
+                            tokio::time::sleep(Duration::from_secs(1)).await;
+                        }
+                        Err(e) => return Err(e.into()),
+                    }
+                };
                 sqlx::migrate!("migrations/postgres").run(&pool).await?;
                 Storage {
                     pool,
