@@ -288,20 +288,19 @@ fn fault_free_standings(dir: &Path) -> Vec<Row> {
         std::fs::copy(root().join("bots/python").join(f), bots.join(f)).unwrap();
     }
     let database = format!("sqlite://{}", dir.join("fault-free.db").display());
-    let out = Command::new(env!("CARGO_BIN_EXE_mazearena"))
-        .args(["tournament", "--bots"])
-        .arg(&bots)
-        .args(["--mazes", "mazes", "--repeats", &REPEATS.to_string()])
-        .args(["--database", &database, "--json"])
-        .env("MAZEARENA_SANDBOX", sandbox().level())
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let repeats = REPEATS.to_string();
+    crate::support::mazearena_json(&[
+        "tournament",
+        "--bots",
+        bots.to_str().unwrap(),
+        "--mazes",
+        "mazes",
+        "--repeats",
+        &repeats,
+        "--database",
+        &database,
+        "--json",
+    ]);
     let runtime = tokio::runtime::Runtime::new().unwrap();
     runtime.block_on(async {
         let storage = Storage::open(&database).await.unwrap();

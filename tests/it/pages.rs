@@ -110,15 +110,7 @@ async fn the_server_reports_its_workers_in_health_metrics_and_pages() {
     let id = worker["worker_id"].as_str().unwrap();
     let html = page(&server, "/workers").await;
     assert!(html.contains(id), "{html}");
-    let metrics = server
-        .client()
-        .get(format!("{}/metrics", server.base))
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let metrics = page(&server, "/metrics").await;
     assert!(
         metrics
             .lines()
