@@ -169,7 +169,14 @@ impl Storage {
                         .connect_with(options.clone())
                         .await
                     {
-                        Ok(pool) => break pool,
+                        Ok(pool) => match sqlx::migrate!("migrations/postgres").run(&pool).await {
+                            Ok(()) => break pool,
+                            Err(e) if since.elapsed() < CONNECT_PATIENCE => {
+                                tracing::warn!(cause = %e, "PostgreSQL did not take the migrations yet; trying again");
+                                tokio::time::sleep(Duration::from_secs(1)).await;
+                            }
+                            Err(e) => return Err(e.into()),
+                        },
                         Err(e) if since.elapsed() < CONNECT_PATIENCE => {
                             tracing::warn!(cause = %e, "PostgreSQL does not answer yet; trying again");
                             tokio::time::sleep(Duration::from_secs(1)).await;
@@ -177,7 +184,6 @@ impl Storage {
                         Err(e) => return Err(e.into()),
                     }
                 };
-                sqlx::migrate!("migrations/postgres").run(&pool).await?;
                 Storage {
                     pool,
                     backend,

@@ -431,14 +431,22 @@ fn tournaments_survive_killed_servers_workers_and_database() {
         let id = runtime.block_on(async {
             wait_healthy(&client, &site.base).await;
             let id = play_under_fire(&client, &site.base, &mut procs, Some(cluster), 11).await;
-            // The workers reported themselves; the killed ones' rows are stale.
-            let health = get(&client, &site.base, "/healthz").await.unwrap();
-            let live = health["workers"].as_array().unwrap();
-            assert_eq!(
-                live.iter().filter(|w| w["role"] == "worker").count(),
-                3,
-                "{health}"
-            );
+            // The workers reported themselves (a worker restarted last reports once it
+            // is up); the killed ones' rows are stale.
+            let deadline = Instant::now() + Duration::from_secs(30);
+            loop {
+                let health = get(&client, &site.base, "/healthz").await.unwrap();
+                let live = health["workers"].as_array().unwrap();
+                let workers = live.iter().filter(|w| w["role"] == "worker").count();
+                if workers == 3 {
+                    break;
+                }
+                assert!(
+                    Instant::now() < deadline,
+                    "{workers} live workers: {health}"
+                );
+                tokio::time::sleep(Duration::from_millis(200)).await;
+            }
             id
         });
         site.finish(&mut procs, &database, id, &want, "PostgreSQL under faults");
