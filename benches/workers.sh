@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Throughput across worker processes on one PostgreSQL: an API server (`serve --jobs 0`)
 # and 1, 2 or 3 `mazearena worker --jobs 1` processes play a tournament of the shipped
-# simple Python bot on the 9 shipped mazes (REPEATS times each), in the full sandbox;
+# simple Python bot on the 9 shipped mazes (REPEATS times each), in the full sandbox
+# (each worker with a data folder of its own: the bot's files come from the database);
 # matches per minute from the tournament's creation to its last record, the settings
 # taken in turn RUNS times (medians). Then the claim itself, timed in the database:
 # PostgreSQL's own statistics (pg_stat_statements) give the mean time of the claim
@@ -52,7 +53,7 @@ PY
 run() { # $1: workers; prints "ms matches"
   local pids=() id total a b
   for ((w = 0; w < $1; w++)); do
-    ./target/release/mazearena worker --jobs 1 --database "$db" --data-dir "$tmp/data" \
+    ./target/release/mazearena worker --jobs 1 --database "$db" --data-dir "$tmp/data-worker$w" \
       >>"$tmp/worker$w.log" 2>&1 &
     pids+=($!)
   done

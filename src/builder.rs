@@ -1,66 +1,194 @@
-//! The build worker: runs the build command of each uploaded bot version that has one,
-//! once, in the sandbox (`runner::build`), and records the result: `ready` versions
-//! play, `build_failed` ones never do, and their owner reads the build log.
+//! The build worker of a match-worker pool: claims the uploaded versions that have a
+//! build command (one build at a time per pool; a claim is a lease in the database, so
+//! each version is built once, by one worker of one machine), runs the build in the
+//! sandbox (`runner::build`) in a fresh folder holding the version's bundle, stores the
+//! built folder as a bundle of its own, and records the result: `ready` versions play
+//! from the built bundle on every worker, `build_failed` ones never play, and their
+//! owner reads the build log. A build whose worker died is claimed again once its lease
+//! expires.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
 use tokio::sync::Notify;
 use tokio_util::sync::CancellationToken;
 
+use crate::registry::{self, RegistryError};
 use crate::runner::{Sandbox, build};
 use crate::storage::Storage;
+use crate::storage::bots::BotVersionRow;
 
 /// How often the queue of builds is looked at when nothing wakes the builder.
 const POLL: Duration = Duration::from_secs(2);
 
-/// Builds waiting versions one at a time until `stop`; `wake` is notified on uploads,
-/// and notified again after each build so match workers look for newly ready versions.
-pub async fn run_builds(
-    storage: Storage,
-    sandbox: Sandbox,
-    wake: Arc<Notify>,
-    stop: CancellationToken,
-) {
-    loop {
-        if stop.is_cancelled() {
-            return;
-        }
-        let next = match storage.next_build().await {
-            Ok(next) => next,
-            Err(e) => {
-                tracing::warn!(error = %e, "cannot read the build queue");
-                None
+/// What a pool's builder needs.
+#[derive(Debug, Clone)]
+pub struct Builder {
+    /// The database.
+    pub storage: Storage,
+    /// How builds are isolated.
+    pub sandbox: Sandbox,
+    /// A local folder for build folders.
+    pub scratch: PathBuf,
+    /// The claimer's name (the pool's lease owner).
+    pub owner: Arc<str>,
+    /// The lease on a claimed build, renewed every third of it.
+    pub lease: Duration,
+}
+
+/// How a claimed build ended.
+enum Ended {
+    /// Record it: `ok` with the built bundle, and the log.
+    Done {
+        ok: bool,
+        built: Option<String>,
+        log: String,
+    },
+    /// Not recorded (the lease was lost, or the database or disk failed): the build is
+    /// claimed again once its lease expires.
+    Dropped,
+}
+
+impl Builder {
+    /// Builds waiting versions one at a time until `stop`; `wake` is notified on uploads,
+    /// and notified again after each build so match workers look for newly ready versions.
+    pub async fn run(self, wake: Arc<Notify>, stop: CancellationToken) {
+        let lease_ms = self.lease.as_millis() as i64;
+        loop {
+            if stop.is_cancelled() {
+                return;
             }
-        };
-        let Some(version) = next else {
-            tokio::select! {
-                _ = stop.cancelled() => return,
-                _ = wake.notified() => {}
-                _ = tokio::time::sleep(POLL) => {}
-            }
-            continue;
-        };
-        let command = version.build_command.clone().unwrap_or_default();
-        let dir = std::path::PathBuf::from(&version.dir);
-        tracing::info!(bot_version_id = version.bot_version_id, %command, "building");
-        let (ok, log) = tokio::select! {
-            _ = stop.cancelled() => return, // dropped: killed; built again next start
-            outcome = build::build_logged(&command, &dir, &sandbox) => match outcome {
-                Ok(o) => {
-                    let mut log = o.log;
-                    if !o.ok {
-                        log.push_str(&format!("\n[build {}]", o.status));
-                    }
-                    (o.ok, log)
+            let woken = wake.notified();
+            let next = match self.storage.claim_build(&self.owner, lease_ms).await {
+                Ok(next) => next,
+                Err(e) => {
+                    tracing::warn!(error = %e, "cannot read the build queue");
+                    None
                 }
-                Err(e) => (false, e.to_string()),
-            },
-        };
-        tracing::info!(bot_version_id = version.bot_version_id, ok, "build ended");
-        if let Err(e) = storage.finish_build(version.bot_version_id, ok, &log).await {
-            tracing::warn!(error = %e, "cannot record a build");
+            };
+            let Some(version) = next else {
+                tokio::select! {
+                    _ = stop.cancelled() => return,
+                    _ = woken => {}
+                    _ = tokio::time::sleep(POLL) => {}
+                }
+                continue;
+            };
+            let id = version.bot_version_id;
+            let ended = tokio::select! {
+                // Dropped: the build is killed and claimed again after its lease.
+                _ = stop.cancelled() => return,
+                ended = self.build_renewing(&version) => ended,
+            };
+            if let Ended::Done { ok, built, log } = ended {
+                tracing::info!(bot_version_id = id, ok, "build ended");
+                match self
+                    .storage
+                    .finish_build(id, &self.owner, ok, built.as_deref(), &log)
+                    .await
+                {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        tracing::warn!(bot_version_id = id, "build claim lost; not recorded")
+                    }
+                    Err(e) => tracing::warn!(error = %e, "cannot record a build"),
+                }
+                wake.notify_waiters();
+            }
         }
-        wake.notify_waiters();
+    }
+
+    /// Builds `version`, renewing its lease meanwhile.
+    async fn build_renewing(&self, version: &BotVersionRow) -> Ended {
+        let lease_ms = self.lease.as_millis() as i64;
+        let mut renew = tokio::time::interval(self.lease / 3);
+        renew.tick().await;
+        let work = self.build(version);
+        tokio::pin!(work);
+        loop {
+            tokio::select! {
+                ended = &mut work => return ended,
+                _ = renew.tick() => {
+                    match self.storage.renew_build_lease(version.bot_version_id, &self.owner, lease_ms).await {
+                        Ok(true) => {}
+                        Ok(false) => {
+                            tracing::warn!(bot_version_id = version.bot_version_id, "build claim lost; stopping the build");
+                            return Ended::Dropped;
+                        }
+                        Err(e) => tracing::warn!(error = %e, "could not renew a build's lease"),
+                    }
+                }
+            }
+        }
+    }
+
+    async fn build(&self, version: &BotVersionRow) -> Ended {
+        let command = version.build_command.clone().unwrap_or_default();
+        let Some(sha) = &version.bundle_sha256 else {
+            return Ended::Done {
+                ok: false,
+                built: None,
+                log: "the version's files are not stored in the database (an old data folder \
+                      that could not be moved): upload it again"
+                    .into(),
+            };
+        };
+        let folder = match tempfile::Builder::new()
+            .prefix(&format!("build-{}-", version.bot_version_id))
+            .tempdir_in(&self.scratch)
+        {
+            Ok(f) => f,
+            Err(e) => {
+                tracing::error!(cause = %e, dir = %self.scratch.display(), "cannot make a build folder");
+                return Ended::Dropped;
+            }
+        };
+        let dir = folder.path().join("bot");
+        if let Err(e) = std::fs::create_dir(&dir) {
+            tracing::error!(cause = %e, "cannot make a build folder");
+            return Ended::Dropped;
+        }
+        if let Err(e) = registry::bundles::unpack_stored(&self.storage, sha, &dir).await {
+            tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "cannot fetch a version's files to build them");
+            return Ended::Dropped;
+        }
+        tracing::info!(bot_version_id = version.bot_version_id, %command, "building");
+        let (ok, mut log) = match build::build_logged(&command, &dir, &self.sandbox).await {
+            Ok(o) => {
+                let mut log = o.log;
+                if !o.ok {
+                    log.push_str(&format!("\n[build {}]", o.status));
+                }
+                (o.ok, log)
+            }
+            Err(e) => (false, e.to_string()),
+        };
+        if !ok {
+            return Ended::Done {
+                ok,
+                built: None,
+                log,
+            };
+        }
+        match registry::bundles::store_dir(&self.storage, &dir, &self.scratch).await {
+            Ok(summary) => Ended::Done {
+                ok: true,
+                built: Some(summary.sha256),
+                log,
+            },
+            Err(RegistryError::Bundle(e)) if e.is_client_error() => {
+                log.push_str(&format!("\n[the built folder cannot be stored: {e}]"));
+                Ended::Done {
+                    ok: false,
+                    built: None,
+                    log,
+                }
+            }
+            Err(e) => {
+                tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "cannot store a built folder");
+                Ended::Dropped
+            }
+        }
     }
 }

@@ -6,6 +6,8 @@
 //! - [`protocol`]: the bot protocol v1 messages and the strict decoding of bot replies.
 //! - [`runner`]: runs one bot process against one maze and returns a [`runner::MatchRecord`].
 //! - [`storage`]: the only SQL: bots, mazes, the match queue, tournaments, leaderboards.
+//! - [`registry`]: registering bots and versions (their files stored as bundles in
+//!   the database), admitting mazes, tokens, the workers' cache of bots' files.
 //! - [`worker`]: match workers that claim queued matches with a lease and record them;
 //!   [`builder`]: builds uploaded bot versions that have a build command.
 //! - [`api`]: the HTTP/JSON API (axum), with its OpenAPI document.
@@ -14,8 +16,8 @@
 //! - [`web`]: HTML: the replay viewer and the server's pages (pure rendering).
 //! - [`cli`]: the `mazearena` command line (run, replay, match, maze, serve, tournament).
 //!
-//! Dependencies point inwards: `engine` <- `protocol` <- `runner` <- `worker`/`storage`
-//! <- `api`, `cli`.
+//! Dependencies point inwards: `engine` <- `protocol` <- `runner` <- `storage` <-
+//! `registry` <- `worker` <- `api`, `cli`.
 
 pub mod api;
 pub mod botfiles;
@@ -25,6 +27,7 @@ pub mod engine;
 pub mod manifest;
 pub mod metrics;
 pub mod protocol;
+pub mod registry;
 pub mod runner;
 pub mod storage;
 pub mod web;

@@ -20,6 +20,7 @@ use tokio_util::task::TaskTracker;
 
 use crate::engine::mazefile;
 use crate::metrics::Metrics;
+use crate::registry::cache::{BundleCache, CachedBundle};
 use crate::runner::{self, BotSpec, Limits, MatchStatus};
 use crate::storage::Storage;
 use crate::storage::matches::ClaimedMatch;
@@ -56,6 +57,11 @@ pub struct WorkerConfig {
     /// `worker`), so that every server shows them; `None`: not reported (a local
     /// tournament).
     pub report_as: Option<&'static str>,
+    /// Where the bots' stored files are unpacked for their matches.
+    pub cache: BundleCache,
+    /// Build the versions waiting for their build, in this local folder; `None`: this
+    /// pool builds nothing (a local tournament, whose bots are built by the caller).
+    pub builds: Option<PathBuf>,
 }
 
 /// How often a reported worker refreshes its row (and looks for expired leases).
@@ -138,12 +144,22 @@ pub fn spawn_workers(
     };
     let reporter = Reporter {
         storage,
-        owner,
+        owner: owner.clone(),
         done_count,
         role: config.report_as,
         jobs: config.jobs.max(1),
         sandbox: config.sandbox.level(),
     };
+    if let Some(scratch) = &config.builds {
+        let builder = crate::builder::Builder {
+            storage: reporter.storage.clone(),
+            sandbox: config.sandbox.clone(),
+            scratch: scratch.clone(),
+            owner: owner.clone(),
+            lease: config.lease,
+        };
+        tracker.spawn(builder.run(wake.clone(), shutdown.stop_claiming.clone()));
+    }
     let lease = config.lease;
     let stop = shutdown.stop_claiming.clone();
     tracker.spawn(async move {
@@ -338,6 +354,15 @@ impl Worker {
         false
     }
 
+    /// The bot's files from the cache: its built bundle, else its bundle; `None` for a
+    /// bot that plays from a local folder.
+    async fn files(&self, job: &ClaimedMatch) -> crate::registry::Result<Option<CachedBundle>> {
+        match job.built_sha256.as_ref().or(job.bundle_sha256.as_ref()) {
+            Some(sha) => Ok(Some(self.config.cache.get(&self.storage, sha).await?)),
+            None => Ok(None),
+        }
+    }
+
     #[tracing::instrument(skip_all, fields(match_id = job.match_id))]
     async fn play(&self, job: ClaimedMatch) {
         let maze = match mazefile::numeric::parse(job.layout.as_bytes()) {
@@ -355,7 +380,19 @@ impl Worker {
                 return;
             }
         };
-        let mut bot = BotSpec::new(job.command.clone(), PathBuf::from(&job.dir));
+        let files = match self.files(&job).await {
+            Ok(files) => files,
+            Err(e) => {
+                // Our fault, not the bot's: the lease expires and the match is tried
+                // again (on this or another worker) within its retries.
+                tracing::error!(cause = %e, "cannot get the bot's files; the match goes back to the queue after its lease");
+                return;
+            }
+        };
+        let dir = files
+            .as_ref()
+            .map_or_else(|| PathBuf::from(&job.dir), |f| f.dir.clone());
+        let mut bot = BotSpec::new(job.command.clone(), dir);
         bot.env = crate::storage::bots::env_pairs(&job.env);
         let started = Instant::now();
         let lease_ms = self.config.lease.as_millis() as i64;

@@ -5,7 +5,6 @@
 use axum::extract::FromRequestParts;
 use axum::http::header;
 use axum::http::request::Parts;
-use sha2::{Digest, Sha256};
 
 use super::AppState;
 use super::error::ApiError;
@@ -21,23 +20,7 @@ pub enum Caller {
     Token(String),
 }
 
-/// SHA-256 of a token, hex.
-pub fn hash_token(token: &str) -> String {
-    Sha256::digest(token.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
-/// A new random token: 32 bytes as hex.
-///
-/// # Errors
-/// When the operating system has no randomness to give.
-pub fn new_token() -> Result<String, ApiError> {
-    let mut bytes = [0u8; 32];
-    getrandom::fill(&mut bytes).map_err(|e| ApiError::Internal(format!("no randomness: {e}")))?;
-    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
-}
+pub use crate::registry::tokens::{hash_token, new_token};
 
 impl FromRequestParts<AppState> for Caller {
     type Rejection = ApiError;

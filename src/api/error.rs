@@ -10,6 +10,8 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 use utoipa::ToSchema;
 
+use crate::botfiles::BundleError;
+use crate::registry::RegistryError;
 use crate::storage::StorageError;
 
 /// Result alias for handlers.
@@ -155,6 +157,26 @@ impl From<StorageError> for ApiError {
         match e {
             StorageError::Conflict(msg) => ApiError::Conflict(msg),
             other => ApiError::Internal(other.to_string()),
+        }
+    }
+}
+
+impl From<RegistryError> for ApiError {
+    fn from(e: RegistryError) -> Self {
+        match e {
+            RegistryError::Invalid(msg) => ApiError::Unprocessable(msg),
+            RegistryError::Conflict(msg) => ApiError::Conflict(msg),
+            RegistryError::NotFound(msg) => ApiError::NotFound(msg),
+            RegistryError::Bundle(
+                e @ (BundleError::TooLarge { .. } | BundleError::TooManyFiles { .. }),
+            ) => ApiError::PayloadTooLarge(e.to_string()),
+            RegistryError::Bundle(e) if e.is_client_error() => {
+                ApiError::Unprocessable(e.to_string())
+            }
+            RegistryError::Storage(e) => e.into(),
+            e @ (RegistryError::Bundle(_) | RegistryError::Internal(_)) => {
+                ApiError::Internal(e.to_string())
+            }
         }
     }
 }

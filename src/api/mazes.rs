@@ -13,10 +13,11 @@ use utoipa_axum::routes;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
-use crate::engine::mazefile::{self, numeric};
-use crate::engine::{generator, render, solver};
-use crate::storage::mazes::{MazeRow, NewMaze};
-use crate::storage::{Storage, StorageError};
+use crate::engine::generator;
+use crate::engine::mazefile::numeric;
+use crate::engine::render;
+use crate::registry;
+use crate::storage::mazes::MazeRow;
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
@@ -102,50 +103,6 @@ impl MazeView {
     }
 }
 
-/// Parses, validates and stores a maze; the optimum is computed here.
-///
-/// # Errors
-/// [`ApiError::Unprocessable`] for an invalid maze (with line and column),
-/// [`ApiError::Conflict`] for a layout stored already.
-pub async fn store_maze(
-    storage: &Storage,
-    name: &str,
-    text: &[u8],
-    hidden: bool,
-) -> ApiResult<MazeRow> {
-    if name.trim().is_empty() || name.chars().count() > 200 {
-        return Err(ApiError::Unprocessable(
-            "a maze needs a name of 1 to 200 characters".into(),
-        ));
-    }
-    let text = text.to_vec();
-    let (maze, optimum) = tokio::task::spawn_blocking(move || {
-        mazefile::parse(&text).map(|m| {
-            let optimum = solver::solve(&m).map(|s| s.steps as i64);
-            (m, optimum)
-        })
-    })
-    .await
-    .map_err(|e| ApiError::Internal(format!("maze task failed: {e}")))?
-    .map_err(|e| ApiError::Unprocessable(format!("invalid maze: {e}")))?;
-    let layout = numeric::write(&maze);
-    let row = storage
-        .insert_maze(&NewMaze {
-            name,
-            hash: &maze.hash(),
-            dim: maze.dim() as i64,
-            layout: &layout,
-            hidden,
-            optimum,
-        })
-        .await
-        .map_err(|e| match e {
-            StorageError::Conflict(msg) => ApiError::Conflict(msg),
-            other => other.into(),
-        })?;
-    Ok(row)
-}
-
 /// Upload a maze, or generate one (admin token).
 #[utoipa::path(post, path = "/api/mazes", tag = "mazes",
     request_body = MazeUpload,
@@ -177,7 +134,8 @@ async fn create_maze(
             ));
         }
     };
-    let row = store_maze(&state.storage, &body.name, text.as_bytes(), body.hidden).await?;
+    let row =
+        registry::mazes::admit(&state.storage, &body.name, text.as_bytes(), body.hidden).await?;
     let mut view = MazeView::new(row, &caller, true);
     view.seed = public_seed;
     Ok((StatusCode::CREATED, axum::Json(view)))

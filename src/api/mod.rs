@@ -50,12 +50,19 @@ pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(30);
 pub struct Settings {
     /// SHA-256 of the admin token.
     pub admin_token_hash: String,
-    /// Where uploaded bots are stored.
+    /// The local data folder (uploads are checked in its `tmp` folder).
     pub data_dir: PathBuf,
     /// The most matches that may wait in the queue; beyond it, 429.
     pub max_queue: i64,
     /// The isolation of bots (`full` or `none`), shown by `/healthz`.
     pub sandbox_level: &'static str,
+}
+
+impl Settings {
+    /// The local folder where uploads are unpacked and checked before they are stored.
+    pub fn scratch(&self) -> PathBuf {
+        self.data_dir.join("tmp")
+    }
 }
 
 /// What every handler gets: cheap to clone.

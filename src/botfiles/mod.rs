@@ -91,6 +91,7 @@ mod bundle;
 mod format;
 mod hash;
 mod names;
+mod pack;
 mod staging;
 mod tar;
 mod zip;
@@ -104,6 +105,7 @@ use self::zip::read_zip;
 use bundle::Bundle;
 use format::{Format, detect_format};
 use names::parse_path;
+pub use pack::{Packed, Skip, hash_dir, pack_dir, skip_build_outputs, skip_nothing};
 use staging::{Staging, check_dest};
 
 /// Default for [`BundleLimits::max_total_bytes`]: 50 MiB of file content.

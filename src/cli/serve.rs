@@ -12,6 +12,10 @@ use tokio_util::task::TaskTracker;
 
 use crate::api::{self, AppState, Settings, auth};
 use crate::metrics::Metrics;
+use crate::registry::{
+    self, RegistryError,
+    cache::{BundleCache, DEFAULT_CACHE_BYTES},
+};
 use crate::runner::Limits;
 use crate::storage::Storage;
 use crate::worker::{self, Shutdown, WorkerConfig};
@@ -43,7 +47,8 @@ pub struct ServeArgs {
         default_value = "sqlite://mazearena.db"
     )]
     database: String,
-    /// Where uploaded bots' files are kept.
+    /// A local folder: the cache of bots' files, build folders, and the place uploads
+    /// are checked in (bots' files themselves are stored in the database).
     #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
     data_dir: PathBuf,
     /// The admin token (uploading mazes, tournaments). If unset, one is generated and
@@ -81,6 +86,10 @@ pub(super) struct PoolArgs {
     /// shutdown.
     #[arg(long, env = "MAZEARENA_MAX_RETRIES", default_value_t = crate::storage::retries::MAX_MATCH_RETRIES)]
     max_retries: i64,
+    /// Size of the local cache of bots' files (unpacked from the database into
+    /// `DATA_DIR/cache`), in MiB; the least recently used bots beyond it are removed.
+    #[arg(long, env = "MAZEARENA_CACHE_MIB", default_value_t = DEFAULT_CACHE_BYTES >> 20)]
+    cache_mib: u64,
 }
 
 impl PoolArgs {
@@ -102,15 +111,24 @@ impl PoolArgs {
         self.jobs.unwrap_or(cores).clamp(least, cores)
     }
 
-    /// The configuration of `jobs` workers that play every queued match in `sandbox`,
-    /// reported in the worker table as `role`.
+    /// The configuration of `jobs` workers that play every queued match in `sandbox`
+    /// and build the versions waiting for their build, reported in the worker table as
+    /// `role`, with their cache and build folders in `data_dir`.
+    ///
+    /// # Errors
+    /// When the cache cannot be created.
     pub(super) fn config(
         &self,
         jobs: usize,
         sandbox: crate::runner::Sandbox,
         role: &'static str,
-    ) -> WorkerConfig {
-        WorkerConfig {
+        data_dir: &std::path::Path,
+    ) -> anyhow::Result<WorkerConfig> {
+        let cache = BundleCache::new(&data_dir.join("cache"), self.cache_mib << 20)?;
+        let builds = data_dir.join("builds");
+        std::fs::create_dir_all(&builds)
+            .with_context(|| format!("cannot create {}", builds.display()))?;
+        Ok(WorkerConfig {
             jobs,
             lease: Duration::from_secs(self.lease_secs.max(1)),
             limits: Limits::default(),
@@ -118,7 +136,9 @@ impl PoolArgs {
             only_tournament: None,
             exit_when_idle: false,
             report_as: Some(role),
-        }
+            cache,
+            builds: Some(builds),
+        })
     }
 
     /// The grace period of a graceful stop.
@@ -164,6 +184,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         );
     }
     load_default_mazes(&storage).await?;
+    registry::migrate::migrate_data_folder(&storage, &data_dir).await?;
 
     let admin_token = match args.admin_token.filter(|t| !t.trim().is_empty()) {
         Some(t) => t,
@@ -201,23 +222,20 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
 
     let shutdown = Shutdown::default();
     let tracker = TaskTracker::new();
-    tracker.spawn(crate::builder::run_builds(
-        storage.clone(),
-        sandbox.clone(),
-        wake.clone(),
-        shutdown.stop_claiming.clone(),
-    ));
-    let pool = (jobs > 0).then(|| {
-        worker::spawn_workers(
+    let pool = if jobs > 0 {
+        Some(worker::spawn_workers(
             &tracker,
             storage.clone(),
-            args.pool.config(jobs, sandbox, "serve"),
+            args.pool
+                .config(jobs, sandbox, "serve", &state.settings.data_dir)?,
             Some(metrics),
             wake,
             shutdown.clone(),
             None,
-        )
-    });
+        ))
+    } else {
+        None
+    };
     tracker.close();
 
     let stop = shutdown.stop_claiming.clone();
@@ -281,9 +299,9 @@ async fn load_default_mazes(storage: &Storage) -> anyhow::Result<()> {
         return Ok(());
     }
     for (name, text) in DEFAULT_MAZES {
-        match api::mazes::store_maze(storage, name, text.as_bytes(), false).await {
+        match registry::mazes::admit(storage, name, text.as_bytes(), false).await {
             // Another server sharing the database stored it first.
-            Ok(_) | Err(api::error::ApiError::Conflict(_)) => {}
+            Ok(_) | Err(RegistryError::Conflict(_)) => {}
             Err(e) => anyhow::bail!("cannot load the default maze {name}: {e}"),
         }
     }

@@ -10,19 +10,17 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use sha2::{Digest, Sha256};
 use tokio::sync::Notify;
 use tokio_util::task::TaskTracker;
 
-use crate::api::auth;
-use crate::engine::mazefile::numeric;
-use crate::engine::solver;
 use crate::manifest::{self, BotManifest};
+use crate::registry::{
+    self,
+    cache::{BundleCache, DEFAULT_CACHE_BYTES},
+};
 use crate::runner::{self, Limits};
 use crate::storage::Storage;
-use crate::storage::bots::NewVersion;
 use crate::storage::leaderboard::Scope;
-use crate::storage::mazes::NewMaze;
 use crate::worker::{self, Shutdown, WorkerConfig};
 
 use super::report::{markdown, print_failures, print_table, results};
@@ -142,7 +140,7 @@ async fn play(
     storage.requeue_expired().await?;
     let mut version_ids = Vec::new();
     for b in &bots {
-        version_ids.push(register(&storage, b).await?);
+        version_ids.push(registry::bots::register_local(&storage, b).await?);
     }
     let mut maze_ids: Vec<i64> = Vec::new();
     let (mut duplicates, mut unplayable): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
@@ -217,6 +215,11 @@ async fn play(
             only_tournament: Some(t.tournament_id),
             exit_when_idle: true,
             report_as: None,
+            cache: BundleCache::new(
+                &std::env::temp_dir().join("mazearena-cache"),
+                DEFAULT_CACHE_BYTES,
+            )?,
+            builds: None,
         },
         None,
         Arc::new(Notify::new()),
@@ -296,108 +299,13 @@ async fn play(
     Ok(())
 }
 
-/// Finds or registers a local bot; a new version when its command or files changed.
-async fn register(storage: &Storage, bot: &BotManifest) -> anyhow::Result<i64> {
-    let dir = bot.dir.display().to_string();
-    let env: Vec<(String, String)> = bot.env.clone().into_iter().collect();
-    let env_text = crate::storage::bots::env_json(&env);
-    let hash = dir_hash(&bot.dir, &format!("{}\0{env_text}", bot.command));
-    let new = NewVersion {
-        command: &bot.command,
-        dir: &dir,
-        files_sha256: &hash,
-        file_count: 0,
-        build_command: None,
-        env: &env,
-    };
-    if let Some(existing) = storage.get_bot_by_name(&bot.name).await? {
-        let latest = storage
-            .get_bot_version(existing.bot_version_id)
-            .await?
-            .context("a bot's latest version vanished")?;
-        if latest.files_sha256 == hash && latest.dir == dir {
-            return Ok(latest.bot_version_id);
-        }
-        return Ok(storage
-            .add_bot_version(existing.bot_id, &new)
-            .await?
-            .bot_version_id);
-    }
-    // Bots registered locally are owned by the admin: their owner token is never shown.
-    let token = auth::new_token().map_err(|e| anyhow::anyhow!("{e}"))?;
-    Ok(storage
-        .create_bot(&bot.name, &auth::hash_token(&token), &new)
-        .await?
-        .bot_version_id)
-}
-
 /// Stores a maze file (or finds it by layout); `None` when its goal cannot be reached.
 async fn store_maze(storage: &Storage, path: &Path) -> anyhow::Result<Option<i64>> {
     let maze = crate::cli::load_maze(path)?;
-    let optimum = solver::solve(&maze).map(|s| s.steps as i64);
-    if optimum.is_none() {
-        return Ok(None);
-    }
-    if let Some(row) = storage.get_maze_by_hash(&maze.hash()).await? {
-        return Ok(Some(row.maze_id));
-    }
     let name = path
         .file_stem()
         .map_or_else(|| "maze".into(), |s| s.to_string_lossy().into_owned());
-    Ok(Some(
-        storage
-            .insert_maze(&NewMaze {
-                name: &name,
-                hash: &maze.hash(),
-                dim: maze.dim() as i64,
-                layout: &numeric::write(&maze),
-                hidden: false,
-                optimum,
-            })
-            .await?
-            .maze_id,
-    ))
-}
-
-/// A content hash of a bot folder and its command (skipping build output folders), so
-/// that an edited bot gets a new version.
-fn dir_hash(dir: &Path, command: &str) -> String {
-    let mut files = Vec::new();
-    walk(dir, dir, 0, &mut files);
-    files.sort();
-    let mut h = Sha256::new();
-    h.update(command.as_bytes());
-    for (rel, path) in files {
-        h.update(b"\0");
-        h.update(rel.as_bytes());
-        h.update(b"\0");
-        if let Ok(bytes) = std::fs::read(&path) {
-            h.update(&bytes);
-        }
-    }
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
-}
-
-fn walk(root: &Path, dir: &Path, depth: usize, out: &mut Vec<(String, PathBuf)>) {
-    if depth > 6 || out.len() > 5000 {
-        return;
-    }
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let name = e.file_name().to_string_lossy().into_owned();
-        if name.starts_with('.')
-            || ["target", "node_modules", "__pycache__"].contains(&name.as_str())
-        {
-            continue;
-        }
-        let p = e.path();
-        if p.is_dir() {
-            walk(root, &p, depth + 1, out);
-        } else if p.is_file() {
-            let rel = p.strip_prefix(root).unwrap_or(&p).display().to_string();
-            out.push((rel, p));
-        }
-    }
+    Ok(registry::mazes::find_or_admit(storage, &name, &maze)
+        .await?
+        .map(|row| row.maze_id))
 }

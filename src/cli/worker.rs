@@ -22,7 +22,8 @@ pub struct WorkerArgs {
     /// the server's own machine.
     #[arg(long, env = "MAZEARENA_DATABASE")]
     database: String,
-    /// Where the bots' files are: the servers' data directory.
+    /// A local folder for the cache of bots' files and for builds (the files themselves
+    /// come from the database: no shared disk is needed).
     #[arg(long, env = "MAZEARENA_DATA_DIR", default_value = "mazearena-data")]
     data_dir: PathBuf,
     #[command(flatten)]
@@ -59,7 +60,7 @@ async fn work(args: WorkerArgs) -> anyhow::Result<()> {
     let pool = worker::spawn_workers(
         &tracker,
         storage.clone(),
-        args.pool.config(jobs, sandbox, "worker"),
+        args.pool.config(jobs, sandbox, "worker", &data_dir)?,
         None,
         Arc::new(Notify::new()),
         shutdown.clone(),

@@ -67,6 +67,11 @@ pub struct BotVersionRow {
     pub built_at: Option<i64>,
     /// Environment variables declared for the bot: a JSON object of strings.
     pub env: String,
+    /// The stored bundle of its files as uploaded (`files_sha256`); `None` for a bot
+    /// registered from a local folder, which plays from [`BotVersionRow::dir`].
+    pub bundle_sha256: Option<String>,
+    /// The stored bundle of its folder after its build, once built.
+    pub built_sha256: Option<String>,
 }
 
 impl BotVersionRow {
@@ -107,10 +112,14 @@ pub mod build_status {
 pub struct NewVersion<'a> {
     /// The command line.
     pub command: &'a str,
-    /// Where its files are (absolute).
+    /// Where its files are (absolute) for a bot registered from a local folder; empty
+    /// for a stored bundle.
     pub dir: &'a str,
-    /// Content hash of the files.
+    /// Content hash of the files (the bundle hash of `botfiles`).
     pub files_sha256: &'a str,
+    /// The stored bundle the version plays from (its hash is `files_sha256`); `None`
+    /// for a local folder.
+    pub bundle_sha256: Option<&'a str>,
     /// Number of files.
     pub file_count: i64,
     /// A build command: the version is `building` until it has run.
@@ -340,9 +349,9 @@ async fn insert_version(
     };
     Ok(sqlx::query_as(
         "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at,
-             build_command, build_status, env)
+             build_command, build_status, env, bundle_sha256)
          values ($1, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = $2), $3, $4, $5, $6, $7,
-             $8, $9, $10)
+             $8, $9, $10, $11)
          returning *",
     )
     .bind(bot_id)
@@ -355,6 +364,7 @@ async fn insert_version(
     .bind(new.build_command)
     .bind(status)
     .bind(env_json(new.env))
+    .bind(new.bundle_sha256)
     .fetch_one(tx)
     .await?)
 }
@@ -372,6 +382,7 @@ mod tests {
             file_count: 1,
             build_command: None,
             env: &[],
+            bundle_sha256: None,
         }
     }
 

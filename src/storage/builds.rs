@@ -1,37 +1,86 @@
 //! Builds of uploaded bot versions: a version with a build command is `building` until
-//! a server has run it once in the sandbox; then it is `ready` (it plays) or
+//! a worker has claimed it and run it once in the sandbox; then it is `ready` (it plays) or
 //! `build_failed` (it never plays, and its queued matches are recorded as `crashed`
 //! with the build's failure as the reason).
 
 use super::bots::{BotVersionRow, build_status};
 use super::matches::failure_record;
-use super::{Result, Storage, now_ms};
+use super::{Backend, Result, Storage, now_ms};
 use crate::runner::outcome::MatchStatus;
 
 /// How much of a build's output is kept for its owner: the last 64 KiB.
 pub const BUILD_LOG_BYTES: usize = 64 * 1024;
 
 impl Storage {
-    /// The oldest version waiting for its build, if any. One server builds at a time;
-    /// a build cut short by a restart is simply run again.
+    /// Claims the oldest version waiting for its build, for `owner` until `lease_ms`
+    /// from now: no other worker builds it meanwhile. A build whose worker died (its
+    /// lease expired) is claimed again.
     ///
     /// # Errors
     /// Database failures.
-    pub async fn next_build(&self) -> Result<Option<BotVersionRow>> {
-        Ok(sqlx::query_as(
-            "select * from bot_version where build_status = $1 order by bot_version_id limit 1",
-        )
+    pub async fn claim_build(&self, owner: &str, lease_ms: i64) -> Result<Option<BotVersionRow>> {
+        let _turn = self.write_turn().await;
+        let now = now_ms();
+        let lock = match self.backend() {
+            Backend::Sqlite => "",
+            Backend::Postgres => "for update skip locked",
+        };
+        Ok(sqlx::query_as(&format!(
+            "update bot_version set build_owner = $1, build_lease_expires_at = $2
+             where bot_version_id = (
+                 select bot_version_id from bot_version
+                 where build_status = $3
+                     and (build_lease_expires_at is null or build_lease_expires_at < $4)
+                 order by bot_version_id limit 1 {lock})
+             returning *"
+        ))
+        .bind(owner)
+        .bind(now + lease_ms)
         .bind(build_status::BUILDING)
+        .bind(now)
         .fetch_optional(self.pool())
         .await?)
     }
 
-    /// Records a build's end: `ready`, or `build_failed` with its queued matches
-    /// recorded as crashed ("the build failed: ..."), in one transaction.
+    /// Extends `owner`'s claim on a build. Returns false if the claim was lost.
     ///
     /// # Errors
     /// Database failures.
-    pub async fn finish_build(&self, bot_version_id: i64, ok: bool, log: &str) -> Result<()> {
+    pub async fn renew_build_lease(
+        &self,
+        bot_version_id: i64,
+        owner: &str,
+        lease_ms: i64,
+    ) -> Result<bool> {
+        let _turn = self.write_turn().await;
+        let done = sqlx::query(
+            "update bot_version set build_lease_expires_at = $1
+             where bot_version_id = $2 and build_owner = $3 and build_status = $4",
+        )
+        .bind(now_ms() + lease_ms)
+        .bind(bot_version_id)
+        .bind(owner)
+        .bind(build_status::BUILDING)
+        .execute(self.pool())
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Records a build's end by `owner` (who claimed it): `ready` (`ok`) with `built`
+    /// (the stored bundle of the built folder), or `build_failed` with its queued matches
+    /// recorded as crashed ("the build failed: ..."), in one transaction. Returns false,
+    /// writing nothing, if `owner` no longer holds the build.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn finish_build(
+        &self,
+        bot_version_id: i64,
+        owner: &str,
+        ok: bool,
+        built: Option<&str>,
+        log: &str,
+    ) -> Result<bool> {
         let mut log = log.to_string();
         if log.len() > BUILD_LOG_BYTES {
             let mut cut = log.len() - BUILD_LOG_BYTES;
@@ -46,17 +95,25 @@ impl Storage {
             build_status::FAILED
         };
         let now = now_ms();
+        let _turn = self.write_turn().await;
         let mut tx = self.pool().begin().await?;
-        sqlx::query(
-            "update bot_version set build_status = $1, build_log = $2, built_at = $3
-             where bot_version_id = $4",
+        let done = sqlx::query(
+            "update bot_version set build_status = $1, build_log = $2, built_at = $3,
+                 built_sha256 = $4, build_owner = null, build_lease_expires_at = null
+             where bot_version_id = $5 and build_owner = $6 and build_status = $7",
         )
         .bind(status)
         .bind(&log)
         .bind(now)
+        .bind(built)
         .bind(bot_version_id)
+        .bind(owner)
+        .bind(build_status::BUILDING)
         .execute(&mut *tx)
         .await?;
+        if done.rows_affected() == 0 {
+            return Ok(false);
+        }
         if !ok {
             let tail: String = log
                 .lines()
@@ -80,7 +137,7 @@ impl Storage {
             .await?;
         }
         tx.commit().await?;
-        Ok(())
+        Ok(true)
     }
 }
 
@@ -103,6 +160,7 @@ mod tests {
                         file_count: 1,
                         build_command: Some("make"),
                         env: &[],
+                        bundle_sha256: None,
                     },
                 )
                 .await
@@ -113,20 +171,87 @@ mod tests {
             // Not claimed while building.
             let claimed = db.claim_next("w", 1000, None).await.unwrap();
             assert!(claimed.is_none_or(|c| c.match_id != m));
-            assert_eq!(
-                db.next_build().await.unwrap().unwrap().bot_version_id,
-                v.bot_version_id
+            let claimed = db.claim_build("w1", 60_000).await.unwrap().unwrap();
+            assert_eq!(claimed.bot_version_id, v.bot_version_id);
+            // Claimed: nobody else builds it until the claim expires.
+            assert!(db.claim_build("w2", 60_000).await.unwrap().is_none());
+            assert!(
+                !db.renew_build_lease(v.bot_version_id, "w2", 1)
+                    .await
+                    .unwrap()
             );
-            db.finish_build(v.bot_version_id, false, "cc: error: no such file\n")
+            assert!(
+                db.renew_build_lease(v.bot_version_id, "w1", -1)
+                    .await
+                    .unwrap()
+            );
+            // w1's claim has expired: w2 takes the build over and w1 can no longer end it.
+            let again = db.claim_build("w2", 60_000).await.unwrap().unwrap();
+            assert_eq!(again.bot_version_id, v.bot_version_id);
+            assert!(
+                !db.finish_build(v.bot_version_id, "w1", false, None, "late")
+                    .await
+                    .unwrap()
+            );
+            assert!(
+                db.finish_build(
+                    v.bot_version_id,
+                    "w2",
+                    false,
+                    None,
+                    "cc: error: no such file\n"
+                )
                 .await
-                .unwrap();
-            assert!(db.next_build().await.unwrap().is_none());
+                .unwrap()
+            );
+            assert!(db.claim_build("w3", 60_000).await.unwrap().is_none());
             let row = db.get_match(m).await.unwrap().unwrap();
             assert_eq!(row.status, "crashed");
             assert!(row.record.unwrap().contains("build failed: cc: error"));
             let v = db.get_bot_version(v.bot_version_id).await.unwrap().unwrap();
             assert_eq!(v.build_status, build_status::FAILED);
             assert!(v.build_log.unwrap().contains("no such file"));
+
+            // A build that worked: the version plays from its built bundle.
+            let v2 = db
+                .add_bot_version(
+                    v.bot_id,
+                    &NewVersion {
+                        command: "./bot",
+                        dir: "",
+                        files_sha256: "s",
+                        file_count: 1,
+                        build_command: Some("make"),
+                        env: &[],
+                        bundle_sha256: None,
+                    },
+                )
+                .await
+                .unwrap();
+            let m2 = db.queue_match(v2.bot_version_id, maze, 1).await.unwrap();
+            db.claim_build("w1", 60_000).await.unwrap().unwrap();
+            db.put_bundle(&crate::storage::bundles::NewBundle {
+                sha256: "b1",
+                archive: b"tgz",
+                files: 1,
+                bytes: 3,
+            })
+            .await
+            .unwrap();
+            assert!(
+                db.finish_build(v2.bot_version_id, "w1", true, Some("b1"), "ok")
+                    .await
+                    .unwrap()
+            );
+            let claimed = db.claim_next("w", 1000, None).await.unwrap().unwrap();
+            assert_eq!(claimed.match_id, m2);
+            assert_eq!(claimed.built_sha256.as_deref(), Some("b1"));
+            let v2 = db
+                .get_bot_version(v2.bot_version_id)
+                .await
+                .unwrap()
+                .unwrap();
+            assert_eq!(v2.build_status, build_status::READY);
         }
     }
 }

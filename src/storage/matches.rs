@@ -90,8 +90,12 @@ pub struct ClaimedMatch {
     pub seed: i64,
     /// The bot's command.
     pub command: String,
-    /// The bot's directory.
+    /// The bot's directory, for a bot registered from a local folder.
     pub dir: String,
+    /// The stored bundle of the bot's files, if it has one.
+    pub bundle_sha256: Option<String>,
+    /// The stored bundle of the bot's folder after its build, if it has one.
+    pub built_sha256: Option<String>,
     /// The maze's canonical numeric text.
     pub layout: String,
     /// The tournament, if any.
@@ -279,7 +283,8 @@ impl Storage {
         drop(turn);
         let Some(id) = id else { return Ok(None) };
         Ok(sqlx::query_as(
-            "select m.match_id, m.seed, v.command, v.dir, z.layout, m.tournament_id, v.env
+            "select m.match_id, m.seed, v.command, v.dir, v.bundle_sha256, v.built_sha256,
+                 z.layout, m.tournament_id, v.env
              from match m join bot_version v on v.bot_version_id = m.bot_version_id
              join maze z on z.maze_id = m.maze_id where m.match_id = $1",
         )

@@ -12,6 +12,7 @@
 
 pub mod bots;
 pub mod builds;
+pub mod bundles;
 pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
@@ -404,6 +405,7 @@ pub(crate) mod test_support {
                     file_count: 1,
                     build_command: None,
                     env: &[],
+                    bundle_sha256: None,
                 },
             )
             .await

@@ -263,6 +263,7 @@ mod tests {
                         file_count: 1,
                         build_command: None,
                         env: &[],
+                        bundle_sha256: None,
                     },
                 )
                 .await
@@ -284,6 +285,7 @@ mod tests {
                 file_count: 1,
                 build_command: None,
                 env: &[],
+                bundle_sha256: None,
             };
             db.add_bot_version(bot_id, &v2).await.unwrap();
             let bot = db.get_bot(bot_id).await.unwrap().unwrap();

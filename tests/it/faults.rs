@@ -412,20 +412,24 @@ fn tournaments_survive_killed_servers_workers_and_database() {
     if let Some((url, cluster)) = &pg {
         let site = Site::new(tmp.path(), "pg");
         let database = runtime.block_on(new_database(url, "faults"));
-        let common = [
-            "--database",
-            &database,
-            "--data-dir",
-            &site.data,
-            "--lease-secs",
-            LEASE_SECS,
-        ];
+        // Every process has a data folder of its own: the bots' files reach the
+        // workers through the database, no disk is shared.
+        let common = |data: &str| {
+            args(&[
+                "--database",
+                &database,
+                "--data-dir",
+                data,
+                "--lease-secs",
+                LEASE_SECS,
+            ])
+        };
         let mut api = args(&["serve", "--jobs", "0", "--bind", &site.bind]);
-        api.extend(args(&common));
+        api.extend(common(&site.data));
         let mut procs = vec![Proc::start("api", api, &site.dir)];
         for w in 0..3 {
             let mut worker = args(&["worker", "--jobs", "1"]);
-            worker.extend(args(&common));
+            worker.extend(common(&format!("{}-worker{w}", site.data)));
             procs.push(Proc::start(&format!("worker{w}"), worker, &site.dir));
         }
         let id = runtime.block_on(async {

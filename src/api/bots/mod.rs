@@ -12,16 +12,14 @@ use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
-use super::auth::{Caller, hash_token, new_token};
+use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppPath, ErrorBody};
 use super::{AppState, MAX_UPLOAD_BYTES};
-use crate::storage::bots::{BotVersionRow, NewVersion};
-use upload::{check_name, read_upload, remove_dir, store_files};
+use crate::registry;
+use crate::storage::bots::BotVersionRow;
+use upload::read_upload;
 
-/// Longest bot name.
-pub const MAX_NAME_CHARS: usize = 64;
-/// Longest bot command.
-pub const MAX_COMMAND_CHARS: usize = 1000;
+pub use crate::registry::bots::{MAX_COMMAND_CHARS, MAX_NAME_CHARS};
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
@@ -200,42 +198,14 @@ async fn create_bot(
     State(state): State<AppState>,
     request: Request,
 ) -> ApiResult<(StatusCode, axum::Json<BotCreated>)> {
-    let upload = read_upload(&state, request).await?;
-    let name = upload
-        .name
-        .clone()
-        .ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
-    check_name(&name)?;
-    if state.storage.get_bot_by_name(&name).await?.is_some() {
-        return Err(ApiError::Conflict(format!(
-            "a bot named {name:?} exists already"
-        )));
-    }
-    let (dir, summary) =
-        store_files(&state.settings.data_dir, upload.files, upload.archive).await?;
-    let token = new_token()?;
-    let new = NewVersion {
-        command: &upload.command,
-        dir: &dir.display().to_string(),
-        files_sha256: &summary.sha256,
-        file_count: summary.files as i64,
-        build_command: upload.build.as_deref(),
-        env: &upload.env,
-    };
-    let row = match state
-        .storage
-        .create_bot(&name, &hash_token(&token), &new)
-        .await
-    {
-        Ok(row) => {
-            state.wake.notify_waiters();
-            row
-        }
-        Err(e) => {
-            remove_dir(&dir).await;
-            return Err(e.into());
-        }
-    };
+    let (name, submission) = read_upload(&state, request).await?.submission()?;
+    let name = name.ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
+    let registered =
+        registry::bots::register(&state.storage, &name, submission, &state.settings.scratch())
+            .await?;
+    state.wake.notify_waiters();
+    let row = registered.version;
+    let token = registered.owner_token;
     Ok((
         StatusCode::CREATED,
         axum::Json(BotCreated {
@@ -270,27 +240,12 @@ async fn create_bot_version(
         return Err(ApiError::NotFound(format!("no bot {id}")));
     }
     caller.require_owner(&state, id).await?;
-    let upload = read_upload(&state, request).await?;
-    let (dir, summary) =
-        store_files(&state.settings.data_dir, upload.files, upload.archive).await?;
-    let new = NewVersion {
-        command: &upload.command,
-        dir: &dir.display().to_string(),
-        files_sha256: &summary.sha256,
-        file_count: summary.files as i64,
-        build_command: upload.build.as_deref(),
-        env: &upload.env,
-    };
-    match state.storage.add_bot_version(id, &new).await {
-        Ok(row) => {
-            state.wake.notify_waiters();
-            Ok((StatusCode::CREATED, axum::Json(row.into())))
-        }
-        Err(e) => {
-            remove_dir(&dir).await;
-            Err(e.into())
-        }
-    }
+    let (_, submission) = read_upload(&state, request).await?.submission()?;
+    let row =
+        registry::bots::add_version(&state.storage, id, submission, &state.settings.scratch())
+            .await?;
+    state.wake.notify_waiters();
+    Ok((StatusCode::CREATED, axum::Json(row.into())))
 }
 
 /// List the bots with their latest version.

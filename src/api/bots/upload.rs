@@ -1,18 +1,16 @@
-//! Reading a bot upload (JSON or a multipart form), checking its fields, and unpacking
-//! its files into a new folder under the data directory.
+//! Reading a bot upload (JSON or a multipart form) into a registry submission.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
 
 use axum::extract::{FromRequest, Multipart, Request};
 use axum::http::header;
 use base64::Engine;
 
-use super::super::auth::new_token;
 use super::super::error::{ApiError, ApiResult, AppJson};
 use super::super::{AppState, MAX_UPLOAD_BYTES};
-use super::{BotUpload, MAX_COMMAND_CHARS, MAX_NAME_CHARS};
-use crate::botfiles::{self, BundleError, BundleLimits, BundleSummary};
+use super::BotUpload;
+use crate::registry::bots::Submission;
+use crate::registry::bundles::BotFiles;
 use crate::runner::botenv;
 
 /// An upload, whichever way it came.
@@ -65,7 +63,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 }
             }
         }
-        return checked(Upload {
+        return Ok(Upload {
             name,
             build,
             env,
@@ -89,7 +87,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         ),
         None => None,
     };
-    checked(Upload {
+    Ok(Upload {
         name: body.name,
         command: body.command,
         build: body.build,
@@ -99,107 +97,35 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
     })
 }
 
-/// Checks the command, the build command and the environment of an upload.
-fn checked(upload: Upload) -> ApiResult<Upload> {
-    check_command(&upload.command)?;
-    if let Some(build) = &upload.build {
-        check_command(build).map_err(|_| {
-            ApiError::Unprocessable(format!(
-                "the build command {build:?} is empty, too long or has unbalanced quotes"
-            ))
-        })?;
-    }
-    botenv::check(&upload.env).map_err(env_error)?;
-    Ok(upload)
-}
-
 fn env_error(e: botenv::BotEnvError) -> ApiError {
     ApiError::Unprocessable(format!("env: {e}"))
 }
 
-pub(super) fn check_name(name: &str) -> ApiResult<()> {
-    let ok = !name.is_empty()
-        && name.chars().count() <= MAX_NAME_CHARS
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
-    if ok {
-        Ok(())
-    } else {
-        Err(ApiError::Unprocessable(format!(
-            "bot name {name:?} is not allowed: 1 to {MAX_NAME_CHARS} letters, digits, '-', '_' or '.'"
-        )))
-    }
-}
-
-pub(super) fn check_command(command: &str) -> ApiResult<()> {
-    if command.chars().count() > MAX_COMMAND_CHARS {
-        return Err(ApiError::Unprocessable(format!(
-            "the command is longer than {MAX_COMMAND_CHARS} characters"
-        )));
-    }
-    match shlex::split(command) {
-        Some(words) if !words.is_empty() => Ok(()),
-        _ => Err(ApiError::Unprocessable(format!(
-            "the command {command:?} is empty or has unbalanced quotes"
-        ))),
-    }
-}
-
-/// Unpacks the files into a new directory under `data_dir/bots`.
-pub(super) async fn store_files(
-    data_dir: &Path,
-    files: Option<BTreeMap<String, String>>,
-    archive: Option<Vec<u8>>,
-) -> ApiResult<(PathBuf, BundleSummary)> {
-    let dir = data_dir
-        .join("bots")
-        .join(new_token()?.get(..24).unwrap_or("bot"));
-    tokio::fs::create_dir_all(&dir)
-        .await
-        .map_err(|e| ApiError::Internal(format!("cannot create {}: {e}", dir.display())))?;
-    let dest = dir.clone();
-    let result = tokio::task::spawn_blocking(move || {
-        let limits = BundleLimits::default();
-        match (files, archive) {
-            (Some(_), Some(_)) => Err(ApiError::Unprocessable(
-                "send the files either as `files` or as `archive_base64`, not both".into(),
-            )),
-            (None, None) => Err(ApiError::Unprocessable(
-                "the bot has no files: send `files` or `archive_base64`".into(),
-            )),
-            (Some(map), None) => botfiles::write_files(&map, &dest, &limits).map_err(bundle_error),
-            (None, Some(bytes)) => {
-                botfiles::unpack_archive(&bytes, &dest, &limits).map_err(bundle_error)
+impl Upload {
+    /// The upload as a registry submission (its files sent one way or the other).
+    pub(super) fn submission(self) -> ApiResult<(Option<String>, Submission)> {
+        let files = match (self.files, self.archive) {
+            (Some(_), Some(_)) => {
+                return Err(ApiError::Unprocessable(
+                    "send the files either as `files` or as `archive_base64`, not both".into(),
+                ));
             }
-        }
-    })
-    .await
-    .map_err(|e| ApiError::Internal(format!("unpacking task failed: {e}")))?;
-    match result {
-        Ok(summary) => Ok((dir, summary)),
-        Err(e) => {
-            remove_dir(&dir).await;
-            Err(e)
-        }
-    }
-}
-
-fn bundle_error(e: BundleError) -> ApiError {
-    if matches!(
-        e,
-        BundleError::TooLarge { .. } | BundleError::TooManyFiles { .. }
-    ) {
-        ApiError::PayloadTooLarge(e.to_string())
-    } else if e.is_client_error() {
-        ApiError::Unprocessable(e.to_string())
-    } else {
-        ApiError::Internal(e.to_string())
-    }
-}
-
-pub(super) async fn remove_dir(dir: &Path) {
-    if let Err(e) = tokio::fs::remove_dir_all(dir).await {
-        tracing::warn!(cause = %e, dir = %dir.display(), "could not remove a bot directory");
+            (None, None) => {
+                return Err(ApiError::Unprocessable(
+                    "the bot has no files: send `files` or `archive_base64`".into(),
+                ));
+            }
+            (Some(map), None) => BotFiles::Map(map),
+            (None, Some(bytes)) => BotFiles::Archive(bytes),
+        };
+        Ok((
+            self.name,
+            Submission {
+                command: self.command,
+                build: self.build,
+                env: self.env,
+                files,
+            },
+        ))
     }
 }

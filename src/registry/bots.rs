@@ -1,0 +1,357 @@
+//! Bots and their versions: registering a bot, adding a version (which resumes a paused
+//! bot), from an upload or from a local folder.
+
+use std::path::Path;
+
+use super::bundles::{BotFiles, store_upload};
+use super::tokens::{hash_token, new_token};
+use super::{RegistryError, Result};
+use crate::botfiles::{BundleLimits, hash_dir, skip_build_outputs};
+use crate::manifest::BotManifest;
+use crate::runner::botenv;
+use crate::storage::Storage;
+use crate::storage::bots::{BotVersionRow, NewVersion};
+
+/// Longest bot name.
+pub const MAX_NAME_CHARS: usize = 64;
+/// Longest bot command (and build command).
+pub const MAX_COMMAND_CHARS: usize = 1000;
+
+/// Limits on hashing a local bot folder (its sources: build outputs are skipped).
+const LOCAL_LIMITS: BundleLimits = BundleLimits {
+    max_total_bytes: 1 << 30,
+    max_files: 50_000,
+};
+
+/// A version as submitted: its command, files, build command and environment.
+#[derive(Debug, Clone)]
+pub struct Submission {
+    /// The command that runs the bot in its folder.
+    pub command: String,
+    /// An optional build command, run once in the sandbox before the version plays.
+    pub build: Option<String>,
+    /// Environment variables for the bot.
+    pub env: Vec<(String, String)>,
+    /// The files.
+    pub files: BotFiles,
+}
+
+/// A registered bot: its first version and its owner token (shown this once).
+#[derive(Debug, Clone)]
+pub struct Registered {
+    /// The first version.
+    pub version: BotVersionRow,
+    /// The owner token in clear.
+    pub owner_token: String,
+}
+
+/// Checks a bot name: 1 to [`MAX_NAME_CHARS`] letters, digits, `-`, `_` or `.`.
+///
+/// # Errors
+/// [`RegistryError::Invalid`] with what is allowed.
+pub fn check_name(name: &str) -> Result<()> {
+    let ok = !name.is_empty()
+        && name.chars().count() <= MAX_NAME_CHARS
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
+    if ok {
+        Ok(())
+    } else {
+        Err(RegistryError::Invalid(format!(
+            "bot name {name:?} is not allowed: 1 to {MAX_NAME_CHARS} letters, digits, '-', '_' or '.'"
+        )))
+    }
+}
+
+/// Checks a command line: at most [`MAX_COMMAND_CHARS`], split like a shell into at
+/// least one word.
+///
+/// # Errors
+/// [`RegistryError::Invalid`] saying why (`what` names it: "the command").
+pub fn check_command(what: &str, command: &str) -> Result<()> {
+    if command.chars().count() > MAX_COMMAND_CHARS {
+        return Err(RegistryError::Invalid(format!(
+            "{what} is longer than {MAX_COMMAND_CHARS} characters"
+        )));
+    }
+    match shlex::split(command) {
+        Some(words) if !words.is_empty() => Ok(()),
+        _ => Err(RegistryError::Invalid(format!(
+            "{what} {command:?} is empty or has unbalanced quotes"
+        ))),
+    }
+}
+
+/// Checks a submission's command, build command and environment.
+///
+/// # Errors
+/// [`RegistryError::Invalid`].
+pub fn check_submission(s: &Submission) -> Result<()> {
+    check_command("the command", &s.command)?;
+    if let Some(build) = &s.build {
+        check_command("the build command", build)?;
+    }
+    botenv::check(&s.env).map_err(|e| RegistryError::Invalid(format!("env: {e}")))
+}
+
+/// Registers a bot named `name` with its first version; its files are stored as a
+/// bundle (`scratch`: a local folder to unpack in).
+///
+/// # Errors
+/// [`RegistryError::Invalid`] (name, command, environment), [`RegistryError::Conflict`]
+/// (the name is taken), [`RegistryError::Bundle`] (the files), the database.
+pub async fn register(
+    storage: &Storage,
+    name: &str,
+    submission: Submission,
+    scratch: &Path,
+) -> Result<Registered> {
+    check_name(name)?;
+    check_submission(&submission)?;
+    if storage.get_bot_by_name(name).await?.is_some() {
+        return Err(taken(name));
+    }
+    let summary = store_upload(storage, submission.files, scratch).await?;
+    let owner_token = new_token()?;
+    let version = storage
+        .create_bot(
+            name,
+            &hash_token(&owner_token),
+            &NewVersion {
+                command: &submission.command,
+                dir: "",
+                files_sha256: &summary.sha256,
+                file_count: summary.files as i64,
+                build_command: submission.build.as_deref(),
+                env: &submission.env,
+                bundle_sha256: Some(&summary.sha256),
+            },
+        )
+        .await?;
+    Ok(Registered {
+        version,
+        owner_token,
+    })
+}
+
+/// Adds a version to bot `bot_id` (which resumes it if it was paused).
+///
+/// # Errors
+/// [`RegistryError::NotFound`] (no such bot), as [`register`] otherwise.
+pub async fn add_version(
+    storage: &Storage,
+    bot_id: i64,
+    submission: Submission,
+    scratch: &Path,
+) -> Result<BotVersionRow> {
+    check_submission(&submission)?;
+    if storage.get_bot(bot_id).await?.is_none() {
+        return Err(RegistryError::NotFound(format!("no bot {bot_id}")));
+    }
+    let summary = store_upload(storage, submission.files, scratch).await?;
+    Ok(storage
+        .add_bot_version(
+            bot_id,
+            &NewVersion {
+                command: &submission.command,
+                dir: "",
+                files_sha256: &summary.sha256,
+                file_count: summary.files as i64,
+                build_command: submission.build.as_deref(),
+                env: &submission.env,
+                bundle_sha256: Some(&summary.sha256),
+            },
+        )
+        .await?)
+}
+
+/// Finds or registers a bot from a local folder (a `bot.toml`), which plays from that
+/// folder on this machine (already built by the caller): a new version when its
+/// command, environment, folder or files (their bundle hash, build outputs left out)
+/// changed. Bots registered this way are owned by the admin (their token is never
+/// shown). Answers the version's id.
+///
+/// # Errors
+/// [`RegistryError::Invalid`] (name, command, environment, a folder that cannot be
+/// hashed), the database.
+pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64> {
+    check_name(&bot.name)?;
+    let env: Vec<(String, String)> = bot.env.clone().into_iter().collect();
+    check_command("the command", &bot.command)?;
+    botenv::check(&env).map_err(|e| RegistryError::Invalid(format!("env: {e}")))?;
+    let folder = bot.dir.clone();
+    let summary =
+        super::bundles::blocking(move || hash_dir(&folder, &LOCAL_LIMITS, &skip_build_outputs))
+            .await?
+            .map_err(|e| {
+                RegistryError::Invalid(format!("bot {}: cannot read its folder: {e}", bot.name))
+            })?;
+    let dir = bot.dir.display().to_string();
+    let new = NewVersion {
+        command: &bot.command,
+        dir: &dir,
+        files_sha256: &summary.sha256,
+        file_count: summary.files as i64,
+        build_command: None,
+        env: &env,
+        bundle_sha256: None,
+    };
+    if let Some(existing) = storage.get_bot_by_name(&bot.name).await? {
+        let latest = storage
+            .get_bot_version(existing.bot_version_id)
+            .await?
+            .ok_or_else(|| RegistryError::Internal("a bot's latest version vanished".into()))?;
+        let same = latest.files_sha256 == summary.sha256
+            && latest.dir == dir
+            && latest.command == bot.command
+            && latest.env_pairs() == env
+            && latest.bundle_sha256.is_none();
+        if same {
+            return Ok(latest.bot_version_id);
+        }
+        return Ok(storage
+            .add_bot_version(existing.bot_id, &new)
+            .await?
+            .bot_version_id);
+    }
+    let token = new_token()?;
+    Ok(storage
+        .create_bot(&bot.name, &hash_token(&token), &new)
+        .await
+        .map_err(|e| match RegistryError::from(e) {
+            RegistryError::Conflict(_) => taken(&bot.name),
+            other => other,
+        })?
+        .bot_version_id)
+}
+
+fn taken(name: &str) -> RegistryError {
+    RegistryError::Conflict(format!("a bot named {name:?} exists already"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::storage::test_support;
+    use std::collections::BTreeMap;
+
+    fn submission(files: &[(&str, &str)]) -> Submission {
+        Submission {
+            command: "python3 bot.py".into(),
+            build: None,
+            env: vec![],
+            files: BotFiles::Map(
+                files
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+                    .collect::<BTreeMap<_, _>>(),
+            ),
+        }
+    }
+
+    #[tokio::test]
+    async fn an_upload_and_the_same_local_folder_have_one_bundle_hash() {
+        let (db, _d) = test_support::fresh().await;
+        let scratch = tempfile::tempdir().unwrap();
+        let up = register(
+            &db,
+            "up",
+            submission(&[("bot.py", "print(1)\n")]),
+            scratch.path(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(
+            up.version.bundle_sha256.as_deref(),
+            Some(up.version.files_sha256.as_str())
+        );
+        assert_eq!(up.version.dir, "");
+        assert!(
+            db.get_bundle(&up.version.files_sha256)
+                .await
+                .unwrap()
+                .is_some()
+        );
+
+        let folder = tempfile::tempdir().unwrap();
+        std::fs::write(folder.path().join("bot.py"), "print(1)\n").unwrap();
+        std::fs::create_dir(folder.path().join("__pycache__")).unwrap();
+        std::fs::write(folder.path().join("__pycache__/bot.pyc"), "junk").unwrap();
+        let manifest = BotManifest {
+            name: "local".into(),
+            command: "python3 bot.py".into(),
+            language: None,
+            build: None,
+            description: None,
+            report: None,
+            claimed: BTreeMap::new(),
+            env: BTreeMap::new(),
+            dir: folder.path().to_path_buf(),
+        };
+        let id = register_local(&db, &manifest).await.unwrap();
+        let local = db.get_bot_version(id).await.unwrap().unwrap();
+        assert_eq!(local.files_sha256, up.version.files_sha256);
+        assert_eq!(local.bundle_sha256, None);
+        // Unchanged: the same version; a changed file or command: a new one.
+        assert_eq!(register_local(&db, &manifest).await.unwrap(), id);
+        std::fs::write(folder.path().join("bot.py"), "print(2)\n").unwrap();
+        let id2 = register_local(&db, &manifest).await.unwrap();
+        assert_ne!(id2, id);
+        let other = BotManifest {
+            command: "python3 -u bot.py".into(),
+            ..manifest.clone()
+        };
+        assert_ne!(register_local(&db, &other).await.unwrap(), id2);
+    }
+
+    #[tokio::test]
+    async fn bad_submissions_are_refused_before_anything_is_stored() {
+        let (db, _d) = test_support::fresh().await;
+        let scratch = tempfile::tempdir().unwrap();
+        let ok = submission(&[("bot.py", "x")]);
+        for (name, s) in [
+            ("bad name!", ok.clone()),
+            (
+                "b",
+                Submission {
+                    command: "'unbalanced".into(),
+                    ..ok.clone()
+                },
+            ),
+            (
+                "c",
+                Submission {
+                    build: Some(String::new()),
+                    ..ok.clone()
+                },
+            ),
+            (
+                "d",
+                Submission {
+                    env: vec![("PATH".into(), "/x".into())],
+                    ..ok.clone()
+                },
+            ),
+        ] {
+            let err = register(&db, name, s, scratch.path()).await.unwrap_err();
+            assert!(matches!(err, RegistryError::Invalid(_)), "{name}: {err}");
+        }
+        let err = register(&db, "e", submission(&[("../x", "1")]), scratch.path())
+            .await
+            .unwrap_err();
+        assert!(matches!(err, RegistryError::Bundle(_)), "{err}");
+        assert_eq!(db.bundle_totals().await.unwrap().0, 0);
+        assert!(db.list_bots().await.unwrap().is_empty());
+
+        register(&db, "f", ok.clone(), scratch.path())
+            .await
+            .unwrap();
+        let err = register(&db, "f", ok.clone(), scratch.path())
+            .await
+            .unwrap_err();
+        assert!(matches!(err, RegistryError::Conflict(_)), "{err}");
+        let err = add_version(&db, 999, ok, scratch.path()).await.unwrap_err();
+        assert!(matches!(err, RegistryError::NotFound(_)), "{err}");
+    }
+}

@@ -1,0 +1,205 @@
+//! Storing a bot's files as a content-addressed bundle in the database.
+//!
+//! A version's `files_sha256` always means one thing: the bundle hash of
+//! [`crate::botfiles`] (files and links with their paths, contents and executable bits;
+//! not timestamps, entry order or archive format). An upload, the same files in a
+//! local folder and the bundle stored for them all give the same hash.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use super::{RegistryError, Result};
+use crate::botfiles::{self, BundleLimits, BundleSummary, Packed, skip_nothing};
+use crate::storage::Storage;
+use crate::storage::bundles::NewBundle;
+
+/// A bot's files as sent: a map of names to texts, or an archive (`.tar.gz`, `.tar`,
+/// `.zip`).
+#[derive(Debug, Clone)]
+pub enum BotFiles {
+    /// File name -> UTF-8 content.
+    Map(BTreeMap<String, String>),
+    /// An archive's bytes.
+    Archive(Vec<u8>),
+}
+
+/// Checks `files` (every rule of [`crate::botfiles`]), stores them as a bundle and
+/// answers what was stored. `scratch` is a local folder for unpacking.
+///
+/// # Errors
+/// [`RegistryError::Bundle`] for refused files; the database; the local disk.
+pub async fn store_upload(
+    storage: &Storage,
+    files: BotFiles,
+    scratch: &Path,
+) -> Result<BundleSummary> {
+    let scratch = scratch.to_path_buf();
+    let packed = blocking(move || {
+        let (_tmp, dest) = scratch_dir(&scratch)?;
+        let limits = BundleLimits::default();
+        let summary = match &files {
+            BotFiles::Map(map) => botfiles::write_files(map, &dest, &limits)?,
+            BotFiles::Archive(bytes) => botfiles::unpack_archive(bytes, &dest, &limits)?,
+        };
+        let packed = botfiles::pack_dir(&dest, &limits, &skip_nothing)?;
+        if packed.summary != summary {
+            return Err(RegistryError::Internal(format!(
+                "the files packed again give {:?}, not {summary:?}",
+                packed.summary
+            )));
+        }
+        Ok(packed)
+    })
+    .await??;
+    put(storage, &packed).await?;
+    Ok(packed.summary)
+}
+
+/// Stores the folder `dir` (a bot's folder after its build, or an old data folder) as a
+/// bundle: packed, then unpacked again in `scratch` to check it against every rule an
+/// upload meets (links that stay inside, the limits) and its hash.
+///
+/// # Errors
+/// [`RegistryError::Bundle`] when the folder cannot be a bundle; the database; the
+/// local disk.
+pub async fn store_dir(storage: &Storage, dir: &Path, scratch: &Path) -> Result<BundleSummary> {
+    let (dir, scratch) = (dir.to_path_buf(), scratch.to_path_buf());
+    let packed = blocking(move || {
+        let limits = BundleLimits::default();
+        let packed = botfiles::pack_dir(&dir, &limits, &skip_nothing)?;
+        let (_tmp, dest) = scratch_dir(&scratch)?;
+        let back = botfiles::unpack_archive(&packed.archive, &dest, &limits)?;
+        if back != packed.summary {
+            return Err(RegistryError::Internal(format!(
+                "{} packed and unpacked gives {back:?}, not {:?}",
+                dir.display(),
+                packed.summary
+            )));
+        }
+        Ok(packed)
+    })
+    .await??;
+    put(storage, &packed).await?;
+    Ok(packed.summary)
+}
+
+/// Unpacks the stored bundle `sha256` into `dest` (an existing empty folder), checking
+/// its hash: for a build, which writes into its folder.
+///
+/// # Errors
+/// A bundle missing from the database or whose files do not give its hash; the local
+/// disk.
+pub async fn unpack_stored(storage: &Storage, sha256: &str, dest: &Path) -> Result<BundleSummary> {
+    let archive = storage.get_bundle(sha256).await?.ok_or_else(|| {
+        RegistryError::NotFound(format!("the bundle {sha256} is not in the database"))
+    })?;
+    let (dest, sha) = (dest.to_path_buf(), sha256.to_owned());
+    blocking(move || {
+        let summary = botfiles::unpack_archive(&archive, &dest, &BundleLimits::default())?;
+        if summary.sha256 != sha {
+            return Err(RegistryError::Internal(format!(
+                "the stored bundle {sha} holds files whose hash is {}: refused",
+                summary.sha256
+            )));
+        }
+        Ok(summary)
+    })
+    .await?
+}
+
+async fn put(storage: &Storage, packed: &Packed) -> Result<()> {
+    storage
+        .put_bundle(&NewBundle {
+            sha256: &packed.summary.sha256,
+            archive: &packed.archive,
+            files: packed.summary.files as i64,
+            bytes: packed.summary.bytes as i64,
+        })
+        .await?;
+    Ok(())
+}
+
+/// A new temporary folder in `scratch` with an empty `bot` folder in it.
+fn scratch_dir(scratch: &Path) -> Result<(tempfile::TempDir, PathBuf)> {
+    let local = |e: std::io::Error| {
+        RegistryError::Internal(format!("cannot unpack in {}: {e}", scratch.display()))
+    };
+    fs::create_dir_all(scratch).map_err(local)?;
+    let tmp = tempfile::Builder::new()
+        .prefix(".unpack-")
+        .tempdir_in(scratch)
+        .map_err(local)?;
+    let dest = tmp.path().join("bot");
+    fs::create_dir(&dest).map_err(local)?;
+    Ok((tmp, dest))
+}
+
+pub(super) async fn blocking<T: Send + 'static>(
+    f: impl FnOnce() -> T + Send + 'static,
+) -> Result<T> {
+    tokio::task::spawn_blocking(f)
+        .await
+        .map_err(|e| RegistryError::Internal(format!("a file task failed: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::storage::test_support;
+
+    #[tokio::test]
+    async fn an_upload_is_stored_once_under_its_content_hash_whatever_its_form() {
+        let (db, _d) = test_support::fresh().await;
+        let scratch = tempfile::tempdir().unwrap();
+        let map: BTreeMap<String, String> = [("bot.py", "print(1)\n"), ("lib/x.py", "X = 2\n")]
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        let from_map = store_upload(&db, BotFiles::Map(map), scratch.path())
+            .await
+            .unwrap();
+        // The same files as a .tar.gz (packed from a folder) give the same hash.
+        let folder = tempfile::tempdir().unwrap();
+        fs::create_dir(folder.path().join("lib")).unwrap();
+        fs::write(folder.path().join("bot.py"), "print(1)\n").unwrap();
+        fs::write(folder.path().join("lib/x.py"), "X = 2\n").unwrap();
+        let tgz = botfiles::pack_dir(folder.path(), &BundleLimits::default(), &skip_nothing)
+            .unwrap()
+            .archive;
+        let from_tgz = store_upload(&db, BotFiles::Archive(tgz), scratch.path())
+            .await
+            .unwrap();
+        assert_eq!(from_map, from_tgz);
+        assert_eq!((from_map.files, from_map.bytes), (2, 15));
+        assert_eq!(db.bundle_totals().await.unwrap().0, 1);
+        let from_dir = store_dir(&db, folder.path(), scratch.path()).await.unwrap();
+        assert_eq!(from_dir, from_map);
+
+        // Stored, it unpacks to the same files.
+        let out = tempfile::tempdir().unwrap();
+        let back = unpack_stored(&db, &from_map.sha256, out.path())
+            .await
+            .unwrap();
+        assert_eq!(back, from_map);
+        assert_eq!(
+            fs::read_to_string(out.path().join("lib/x.py")).unwrap(),
+            "X = 2\n"
+        );
+
+        // Refused files store nothing and leave nothing in the scratch folder.
+        let err = store_upload(&db, BotFiles::Archive(b"junk".to_vec()), scratch.path())
+            .await
+            .unwrap_err();
+        assert!(err.is_client_error(), "{err}");
+        assert_eq!(fs::read_dir(scratch.path()).unwrap().count(), 0);
+        assert_eq!(db.bundle_totals().await.unwrap().0, 1);
+
+        // A folder with a link out of it cannot be a bundle.
+        std::os::unix::fs::symlink("/etc/passwd", folder.path().join("out")).unwrap();
+        let err = store_dir(&db, folder.path(), scratch.path())
+            .await
+            .unwrap_err();
+        assert!(matches!(err, RegistryError::Bundle(_)), "{err}");
+    }
+}
