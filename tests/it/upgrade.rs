@@ -1,7 +1,8 @@
 //! Databases made by earlier releases open in this one: their migrations run, and what
 //! they hold reads back the same. `tests/fixtures/db/made-by-0.1.0.db` was made by
 //! release 0.1.0 (a tournament of the shipped Python bots and a bot that quits, on two
-//! shipped mazes); `replay-N.json` are its own exports of matches N.
+//! shipped mazes); `replay-N.json` are its own exports of matches N. An older data
+//! folder (uploaded bots' files on disk) moves into the database.
 
 use std::path::Path;
 
@@ -64,4 +65,65 @@ async fn a_database_of_release_0_1_0_keeps_its_standings_and_replays() {
             panic!("match {id}: {e}");
         }
     }
+}
+
+/// A server started on the data folder of a release that kept uploaded bots' files
+/// there (`DATA_DIR/bots/<random>/`, the version's `dir`) moves them into the database:
+/// the version then plays from its stored bundle, with the old folder gone.
+#[tokio::test]
+async fn a_data_folder_of_an_earlier_release_moves_into_the_database() {
+    use mazearena::botfiles::{BundleLimits, hash_dir, skip_nothing};
+    use mazearena::registry::tokens::hash_token;
+    use mazearena::storage::Storage;
+    use mazearena::storage::bots::NewVersion;
+
+    let dir = tempfile::tempdir().unwrap();
+    let old = dir.path().join("data/bots/3f9c2a71d0be");
+    std::fs::create_dir_all(&old).unwrap();
+    for f in ["simple_bot.py", "mazebot.py"] {
+        std::fs::copy(root().join("bots/python").join(f), old.join(f)).unwrap();
+    }
+    let files = hash_dir(&old, &BundleLimits::default(), &skip_nothing).unwrap();
+    let database = format!("sqlite://{}", dir.path().join("mazearena.db").display());
+    let storage = Storage::open(&database).await.unwrap();
+    let version = storage
+        .create_bot(
+            "old-upload",
+            &hash_token("old-owner-token"),
+            &NewVersion {
+                command: "python3 simple_bot.py",
+                dir: &old.display().to_string(),
+                files_sha256: &files.sha256,
+                file_count: 2,
+                build_command: None,
+                env: &[],
+                bundle_sha256: None,
+            },
+        )
+        .await
+        .unwrap();
+    storage.close().await;
+
+    let server = crate::support::TestServer::start(dir.path(), &[]);
+    std::fs::remove_dir_all(dir.path().join("data/bots")).unwrap();
+    let (s, queued) = server
+        .post(
+            "/api/matches",
+            serde_json::json!({"bot_id": version.bot_id, "maze_id": 1, "seed": 3}),
+            Some("old-owner-token"),
+        )
+        .await;
+    assert_eq!(s, 202, "{queued}");
+    let done = crate::support::wait_match(&server, queued["match_id"].as_i64().unwrap()).await;
+    assert_eq!(done["status"], "finished", "{done}");
+
+    let storage = Storage::open(&database).await.unwrap();
+    let moved = storage
+        .get_bot_version(version.bot_version_id)
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(moved.bundle_sha256.as_deref(), Some(files.sha256.as_str()));
+    assert_eq!(moved.dir, "");
+    assert!(storage.get_bundle(&files.sha256).await.unwrap().is_some());
 }
