@@ -6,7 +6,7 @@ use std::path::Path;
 use super::bundles::{BotFiles, store_upload};
 use super::tokens::{hash_token, new_token};
 use super::{RegistryError, Result};
-use crate::botfiles::{BundleLimits, hash_dir, skip_build_outputs};
+use crate::botfiles::{BundleLimits, BundleSummary, hash_dir, skip_build_outputs};
 use crate::manifest::BotManifest;
 use crate::runner::botenv;
 use crate::storage::Storage;
@@ -104,7 +104,7 @@ pub fn check_submission(s: &Submission) -> Result<()> {
 pub async fn register(
     storage: &Storage,
     name: &str,
-    submission: Submission,
+    mut submission: Submission,
     scratch: &Path,
 ) -> Result<Registered> {
     check_name(name)?;
@@ -112,21 +112,14 @@ pub async fn register(
     if storage.get_bot_by_name(name).await?.is_some() {
         return Err(taken(name));
     }
-    let summary = store_upload(storage, submission.files, scratch).await?;
+    let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
+    let summary = store_upload(storage, files, scratch).await?;
     let owner_token = new_token()?;
     let version = storage
         .create_bot(
             name,
             &hash_token(&owner_token),
-            &NewVersion {
-                command: &submission.command,
-                dir: "",
-                files_sha256: &summary.sha256,
-                file_count: summary.files as i64,
-                build_command: submission.build.as_deref(),
-                env: &submission.env,
-                bundle_sha256: Some(&summary.sha256),
-            },
+            &stored_version(&submission, &summary),
         )
         .await?;
     Ok(Registered {
@@ -142,27 +135,17 @@ pub async fn register(
 pub async fn add_version(
     storage: &Storage,
     bot_id: i64,
-    submission: Submission,
+    mut submission: Submission,
     scratch: &Path,
 ) -> Result<BotVersionRow> {
     check_submission(&submission)?;
     if storage.get_bot(bot_id).await?.is_none() {
         return Err(RegistryError::NotFound(format!("no bot {bot_id}")));
     }
-    let summary = store_upload(storage, submission.files, scratch).await?;
+    let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
+    let summary = store_upload(storage, files, scratch).await?;
     Ok(storage
-        .add_bot_version(
-            bot_id,
-            &NewVersion {
-                command: &submission.command,
-                dir: "",
-                files_sha256: &summary.sha256,
-                file_count: summary.files as i64,
-                build_command: submission.build.as_deref(),
-                env: &submission.env,
-                bundle_sha256: Some(&summary.sha256),
-            },
-        )
+        .add_bot_version(bot_id, &stored_version(&submission, &summary))
         .await?)
 }
 
@@ -224,6 +207,19 @@ pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64>
             other => other,
         })?
         .bot_version_id)
+}
+
+/// The version of a submission whose files were stored as the bundle `summary`.
+fn stored_version<'a>(submission: &'a Submission, summary: &'a BundleSummary) -> NewVersion<'a> {
+    NewVersion {
+        command: &submission.command,
+        dir: "",
+        files_sha256: &summary.sha256,
+        file_count: summary.files as i64,
+        build_command: submission.build.as_deref(),
+        env: &submission.env,
+        bundle_sha256: Some(&summary.sha256),
+    }
 }
 
 fn taken(name: &str) -> RegistryError {
