@@ -1,6 +1,7 @@
 //! The README's examples run as written: its server section against a fresh real
 //! server, one command at a time as a user would type them (letting the queued matches
-//! and builds finish in between), and its local viewer example.
+//! and builds finish in between), its local viewer example, and its scale-out example
+//! (an API server and a worker on PostgreSQL, each with a data folder of its own).
 
 use std::path::Path;
 use std::process::Command;
@@ -168,4 +169,133 @@ fn the_readme_viewer_example_runs_as_written() {
     }
     let html = std::fs::read_to_string(dir.path().join("match.html")).unwrap();
     assert!(html.contains("id=\"replay-data\"") && html.contains("\"maze_layout\""));
+}
+
+/// Starts one long-running README command in bash (`mazearena` being the binary under
+/// test, which replaces the shell), its output in `log`.
+fn spawn_sh(dir: &Path, command: &str, log: &Path) -> std::process::Child {
+    let script = format!(
+        "mazearena() {{ exec \"{}\" \"$@\"; }}\n{command}",
+        env!("CARGO_BIN_EXE_mazearena")
+    );
+    let out = std::fs::File::create(log).unwrap();
+    Command::new("bash")
+        .args(["-c", &script])
+        .env("MAZEARENA_SANDBOX", sandbox().level())
+        .current_dir(dir)
+        .stdout(out.try_clone().unwrap())
+        .stderr(out)
+        .spawn()
+        .unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn the_readme_scale_out_example_runs_as_written_on_postgresql() {
+    let Some((url, _)) =
+        crate::faults::postgres("the_readme_scale_out_example_runs_as_written_on_postgresql")
+    else {
+        return;
+    };
+    let database = crate::faults::new_database(&url, "readme").await;
+    let dir = tempfile::tempdir().unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let block = blocks("Scaling out: PostgreSQL, API servers and workers").remove(0);
+    let cmds = commands(&block);
+    assert_eq!(cmds.len(), 2, "{block}");
+    // The machine-specific parts replaced: the database, the address and each
+    // process's own data folder (they share no disk).
+    let mut procs = Vec::new();
+    for (k, command) in cmds.iter().enumerate() {
+        assert!(command.contains("postgres://"), "{command}");
+        let data = dir.path().join(format!("data{k}"));
+        let command = command
+            .replace(
+                "postgres://mazearena:secret@db.example/mazearena",
+                &database,
+            )
+            .replace("0.0.0.0:8080", &format!("127.0.0.1:{port}"))
+            .replace("/var/lib/mazearena", data.to_str().unwrap());
+        procs.push(spawn_sh(
+            dir.path(),
+            &command,
+            &dir.path().join(format!("{k}.log")),
+        ));
+    }
+    let base = format!("http://127.0.0.1:{port}");
+    let client = reqwest::Client::new();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while client.get(format!("{base}/healthz")).send().await.is_err() {
+        assert!(Instant::now() < deadline, "the API server did not come up");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let bot: serde_json::Value = client
+        .post(format!("{base}/api/bots"))
+        .json(
+            &serde_json::json!({"name": "simple", "command": "python3 simple_bot.py",
+            "files": crate::support::simple_bot_files()}),
+        )
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    let queued: serde_json::Value = client
+        .post(format!("{base}/api/matches"))
+        .bearer_auth(bot["owner_token"].as_str().unwrap())
+        .json(&serde_json::json!({"bot_id": bot["bot_id"], "maze_id": 1}))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    let id = queued["match_id"]
+        .as_i64()
+        .unwrap_or_else(|| panic!("{queued}"));
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let (played, health) = loop {
+        let m: serde_json::Value = client
+            .get(format!("{base}/api/matches/{id}"))
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        if m["status"] != "queued" && m["status"] != "running" {
+            let health: serde_json::Value = client
+                .get(format!("{base}/healthz"))
+                .send()
+                .await
+                .unwrap()
+                .json()
+                .await
+                .unwrap();
+            break (m, health);
+        }
+        assert!(Instant::now() < deadline, "the match was not played: {m}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    for p in &mut procs {
+        let _ = nix::sys::signal::kill(
+            nix::unistd::Pid::from_raw(p.id() as i32),
+            nix::sys::signal::Signal::SIGTERM,
+        );
+    }
+    for p in &mut procs {
+        assert!(p.wait().unwrap().success());
+    }
+    assert_eq!(played["status"], "finished", "{played}");
+    let workers = health["workers"].as_array().unwrap();
+    assert!(
+        workers
+            .iter()
+            .any(|w| w["role"] == "worker" && w["jobs"] == 2),
+        "{health}"
+    );
 }
