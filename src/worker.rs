@@ -382,10 +382,28 @@ impl Worker {
         };
         let files = match self.files(&job).await {
             Ok(files) => files,
+            Err(e) if e.is_permanent() => {
+                // A bundle missing or damaged in the database: trying again cannot help.
+                tracing::error!(cause = %e, "the bot's stored files cannot be used; match marked crashed");
+                let _ = self
+                    .storage
+                    .fail_match(
+                        job.match_id,
+                        &self.owner,
+                        &format!("the server could not use the bot's stored files: {e}"),
+                    )
+                    .await;
+                return;
+            }
             Err(e) => {
-                // Our fault, not the bot's: the lease expires and the match is tried
-                // again (on this or another worker) within its retries.
-                tracing::error!(cause = %e, "cannot get the bot's files; the match goes back to the queue after its lease");
+                // The database or this machine's disk: not the bot's doing. The match goes
+                // back to the queue (not counted against its retries) for this or another
+                // worker, after a pause.
+                tracing::error!(cause = %e, "cannot get the bot's files; the match goes back to the queue");
+                if let Err(e) = self.storage.release_match(job.match_id, &self.owner).await {
+                    tracing::error!(cause = %e, "could not re-queue the match; its lease will expire");
+                }
+                tokio::time::sleep(Duration::from_secs(1)).await;
                 return;
             }
         };

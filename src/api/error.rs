@@ -174,9 +174,9 @@ impl From<RegistryError> for ApiError {
                 ApiError::Unprocessable(e.to_string())
             }
             RegistryError::Storage(e) => e.into(),
-            e @ (RegistryError::Bundle(_) | RegistryError::Internal(_)) => {
-                ApiError::Internal(e.to_string())
-            }
+            e @ (RegistryError::Bundle(_)
+            | RegistryError::Corrupt(_)
+            | RegistryError::Internal(_)) => ApiError::Internal(e.to_string()),
         }
     }
 }

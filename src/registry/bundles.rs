@@ -96,9 +96,16 @@ pub async fn unpack_stored(storage: &Storage, sha256: &str, dest: &Path) -> Resu
     })?;
     let (dest, sha) = (dest.to_path_buf(), sha256.to_owned());
     blocking(move || {
-        let summary = botfiles::unpack_archive(&archive, &dest, &BundleLimits::default())?;
+        let summary = botfiles::unpack_archive(&archive, &dest, &BundleLimits::default()).map_err(
+            |e| match e.is_client_error() {
+                true => RegistryError::Corrupt(format!(
+                    "the stored bundle {sha} cannot be unpacked: {e}"
+                )),
+                false => e.into(),
+            },
+        )?;
         if summary.sha256 != sha {
-            return Err(RegistryError::Internal(format!(
+            return Err(RegistryError::Corrupt(format!(
                 "the stored bundle {sha} holds files whose hash is {}: refused",
                 summary.sha256
             )));

@@ -120,14 +120,17 @@ impl BundleCache {
             Ok(s) => s,
             Err(e) => {
                 let _ = fs::remove_dir_all(&dir);
-                return Err(RegistryError::Internal(format!(
-                    "the stored bundle {sha} cannot be unpacked: {e}"
-                )));
+                let what = format!("the stored bundle {sha} cannot be unpacked: {e}");
+                return Err(if e.is_client_error() {
+                    RegistryError::Corrupt(what)
+                } else {
+                    RegistryError::Internal(what)
+                });
             }
         };
         if summary.sha256 != sha {
             let _ = fs::remove_dir_all(&dir);
-            return Err(RegistryError::Internal(format!(
+            return Err(RegistryError::Corrupt(format!(
                 "the stored bundle {sha} holds files whose hash is {}: refused",
                 summary.sha256
             )));
@@ -273,7 +276,11 @@ mod tests {
         let root = tempfile::tempdir().unwrap();
         let cache = BundleCache::new(root.path(), DEFAULT_CACHE_BYTES).unwrap();
         let err = cache.get(&db, &forged).await.unwrap_err();
-        assert!(err.to_string().contains("refused"), "{err}");
+        assert!(matches!(err, RegistryError::Corrupt(_)), "{err}");
+        assert!(
+            err.is_permanent() && err.to_string().contains("refused"),
+            "{err}"
+        );
         assert!(!root.path().join(&forged).exists());
         assert!(!root.path().join(format!("{forged}.ready")).exists());
     }

@@ -40,6 +40,10 @@ pub enum RegistryError {
     /// The bot's files were refused, or could not be stored.
     #[error(transparent)]
     Bundle(#[from] BundleError),
+    /// A stored bundle does not hold what its hash says (or cannot be unpacked): a
+    /// damaged database, never the bot's doing.
+    #[error("{0}")]
+    Corrupt(String),
     /// The database failed.
     #[error(transparent)]
     Storage(StorageError),
@@ -64,6 +68,21 @@ impl RegistryError {
             RegistryError::Invalid(_) | RegistryError::Conflict(_) | RegistryError::NotFound(_) => {
                 true
             }
+            RegistryError::Bundle(e) => e.is_client_error(),
+            RegistryError::Corrupt(_) | RegistryError::Storage(_) | RegistryError::Internal(_) => {
+                false
+            }
+        }
+    }
+
+    /// `true` when trying again cannot help: a bundle missing from the database or
+    /// damaged, a malformed hash (as opposed to a database or local disk failure).
+    pub fn is_permanent(&self) -> bool {
+        match self {
+            RegistryError::Invalid(_)
+            | RegistryError::Conflict(_)
+            | RegistryError::NotFound(_)
+            | RegistryError::Corrupt(_) => true,
             RegistryError::Bundle(e) => e.is_client_error(),
             RegistryError::Storage(_) | RegistryError::Internal(_) => false,
         }

@@ -2,7 +2,8 @@
 //! they hold reads back the same. `tests/fixtures/db/made-by-0.1.0.db` was made by
 //! release 0.1.0 (a tournament of the shipped Python bots and a bot that quits, on two
 //! shipped mazes); `replay-N.json` are its own exports of matches N. An older data
-//! folder (uploaded bots' files on disk) moves into the database.
+//! folder (uploaded bots' files on disk) moves into the database; a bundle damaged in
+//! the database is refused by the worker.
 
 use std::path::Path;
 
@@ -126,4 +127,88 @@ async fn a_data_folder_of_an_earlier_release_moves_into_the_database() {
     assert_eq!(moved.bundle_sha256.as_deref(), Some(files.sha256.as_str()));
     assert_eq!(moved.dir, "");
     assert!(storage.get_bundle(&files.sha256).await.unwrap().is_some());
+}
+
+/// A bundle damaged in the database (its files no longer give its hash) never plays:
+/// the worker refuses it, and the match is recorded as crashed with the reason, once.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_damaged_bundle_is_refused_by_the_worker_and_its_match_says_why() {
+    use mazearena::storage::Storage;
+    use mazearena::storage::bundles::NewBundle;
+
+    let dir = tempfile::tempdir().unwrap();
+    let server = crate::support::TestServer::start(dir.path(), &["--jobs", "0"]);
+    let (bot, token) = crate::support::register(
+        &server,
+        "tampered",
+        "python3 simple_bot.py",
+        crate::support::simple_bot_files(),
+    )
+    .await;
+    // Someone with the database swaps the version's files for other files under a
+    // made-up hash.
+    let storage = Storage::open(&server.database).await.unwrap();
+    let version = storage.bot_versions(bot).await.unwrap().remove(0);
+    let real = version.bundle_sha256.clone().unwrap();
+    let archive = storage.get_bundle(&real).await.unwrap().unwrap();
+    let forged = "0123456789abcdef".repeat(4);
+    storage
+        .put_bundle(&NewBundle {
+            sha256: &forged,
+            archive: &archive,
+            files: 2,
+            bytes: 1,
+        })
+        .await
+        .unwrap();
+    storage
+        .set_version_bundles(version.bot_version_id, Some(&forged), None)
+        .await
+        .unwrap();
+
+    let mut worker = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
+        .args([
+            "worker",
+            "--jobs",
+            "1",
+            "--database",
+            &server.database,
+            "--data-dir",
+        ])
+        .arg(dir.path().join("worker"))
+        .env("MAZEARENA_SANDBOX", crate::support::sandbox().level())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let (s, queued) = server
+        .post(
+            "/api/matches",
+            serde_json::json!({"bot_id": bot, "maze_id": 1}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{queued}");
+    let id = queued["match_id"].as_i64().unwrap();
+    let done = crate::support::wait_match(&server, id).await;
+    let _ = nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(worker.id() as i32),
+        nix::sys::signal::Signal::SIGTERM,
+    );
+    assert!(worker.wait().unwrap().success());
+    assert_eq!(
+        (&done["status"], &done["attempts"]),
+        (&serde_json::json!("crashed"), &serde_json::json!(1)),
+        "{done}"
+    );
+    let (_, log) = server
+        .get(&format!("/api/matches/{id}/log"), Some(&token))
+        .await;
+    let reason = log["error"]["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("the server could not use the bot's stored files")
+            && reason.contains("refused"),
+        "{reason}"
+    );
+    // Nothing of it stayed in the worker's cache.
+    assert!(!dir.path().join("worker/cache").join(&forged).exists());
 }
