@@ -7,7 +7,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
 
-use nix::sys::resource::{Resource, setrlimit};
 use nix::sys::signal::{Signal, killpg};
 use nix::unistd::Pid;
 use tokio::process::{Child, Command};
@@ -178,27 +177,25 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
         Sandbox::None => Some((MAX_BOT_FILE_BYTES, launch.memory_limit_bytes.map(|b| b * 2))),
         Sandbox::Full(_) => None,
     };
-    // SAFETY: the closure runs in the child between fork and exec; it only calls
-    // write(2) on fds opened before the fork and setrlimit(2), both async-signal-safe,
-    // and allocates nothing.
-    unsafe {
-        cmd.pre_exec(move || {
-            cgroup::join_now(&join)?;
-            let _ = setrlimit(Resource::RLIMIT_CORE, 0, 0);
-            if let Some((fsize, address_space)) = per_process {
-                let _ = setrlimit(Resource::RLIMIT_FSIZE, fsize, fsize);
-                if let Some(bytes) = address_space {
-                    setrlimit(Resource::RLIMIT_AS, bytes, bytes).map_err(std::io::Error::from)?;
-                }
-            }
-            Ok(())
-        });
+    if !join.is_empty() {
+        // SAFETY: the closure runs in the child between fork and exec; it only calls
+        // write(2) on fds opened before the fork, which is async-signal-safe, and
+        // allocates nothing.
+        unsafe {
+            cmd.pre_exec(move || cgroup::join_now(&join));
+        }
     }
+    // Without a closure to run before exec, the bot starts with posix_spawn (vfork), which
+    // does not copy the server's page tables: a fork would make every other match
+    // thread of the server take copy-on-write faults. Its limits are set right after.
     let child = cmd.spawn().map_err(|source| LaunchError::Spawn {
         program: words[0].clone(),
         dir: launch.dir.display().to_string(),
         source,
     })?;
+    if let Some(pid) = child.id() {
+        set_limits(pid, per_process);
+    }
     Ok(BotProcess {
         pid: child.id(),
         child,
@@ -230,9 +227,53 @@ fn in_sandbox(word: &str, dir: &Path) -> std::ffi::OsString {
     }
 }
 
+/// Sets the limits of the bot's process `pid` just after its start: no core dumps, and
+/// without the sandbox a largest file and address space (`per_process`).
+fn set_limits(pid: u32, per_process: Option<(u64, Option<u64>)>) {
+    let set = |resource, value: u64| {
+        let limit = libc::rlimit {
+            rlim_cur: value,
+            rlim_max: value,
+        };
+        // SAFETY: prlimit(2) reads `limit` and writes nothing (no old limit asked for);
+        // a bot that is gone already is an error that is ignored.
+        unsafe { libc::prlimit(pid as libc::pid_t, resource, &limit, std::ptr::null_mut()) };
+    };
+    set(libc::RLIMIT_CORE, 0);
+    if let Some((fsize, address_space)) = per_process {
+        set(libc::RLIMIT_FSIZE, fsize);
+        if let Some(bytes) = address_space {
+            set(libc::RLIMIT_AS, bytes);
+        }
+    }
+}
+
+/// `program` found on the `PATH` the bot gets, when it is a bare name: the process can
+/// then start with posix_spawn (which the standard library uses only for a path when
+/// the child's `PATH` differs from ours). Unchanged when it is not found.
+fn on_path(program: &str) -> std::ffi::OsString {
+    if program.contains('/') {
+        return program.into();
+    }
+    let found = std::env::var_os("PATH").and_then(|path| {
+        std::env::split_paths(&path)
+            .filter(|dir| dir.is_absolute())
+            .map(|dir| dir.join(program))
+            .find(|candidate| {
+                use std::os::unix::fs::PermissionsExt;
+                std::fs::metadata(candidate)
+                    .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+            })
+    });
+    found.map_or_else(|| program.into(), PathBuf::into_os_string)
+}
+
 fn direct(launch: &Launch<'_>, words: &[String]) -> Command {
-    let mut cmd = Command::new(&words[0]);
-    cmd.args(&words[1..]).current_dir(launch.dir).env_clear();
+    let mut cmd = Command::new(on_path(&words[0]));
+    cmd.arg0(&words[0])
+        .args(&words[1..])
+        .current_dir(launch.dir)
+        .env_clear();
     for key in PASSED_ENV {
         if let Some(value) = std::env::var_os(key) {
             cmd.env(key, value);
@@ -363,5 +404,46 @@ mod tests {
             spawn(&launch("/nonexistent/bot")),
             Err(LaunchError::Spawn { .. })
         ));
+    }
+
+    #[tokio::test]
+    async fn a_bare_program_is_found_on_the_path_and_its_limits_are_set() {
+        let sh = on_path("sh");
+        assert!(Path::new(&sh).is_absolute(), "{sh:?}");
+        assert_eq!(on_path("./bot"), "./bot");
+        assert_eq!(on_path("no-such-program-here"), "no-such-program-here");
+
+        // The limits reach the started process (read back from /proc).
+        let dir = std::env::temp_dir();
+        let none = Sandbox::None;
+        let mut bot = spawn(&Launch {
+            command: "sleep 5",
+            dir: &dir,
+            memory_limit_bytes: Some(64 << 20),
+            process_limit: None,
+            scratch_bytes: 1 << 20,
+            sandbox: &none,
+            env: &[],
+        })
+        .unwrap();
+        let pid = bot.pid.unwrap();
+        let limits = std::fs::read_to_string(format!("/proc/{pid}/limits")).unwrap();
+        bot.kill_all();
+        let _ = bot.child.wait().await;
+        let line = |name: &str| {
+            limits
+                .lines()
+                .find(|l| l.starts_with(name))
+                .unwrap_or_default()
+                .split_whitespace()
+                .map(str::to_owned)
+                .collect::<Vec<_>>()
+        };
+        assert!(
+            line("Max core file size").contains(&"0".to_owned()),
+            "{limits}"
+        );
+        let address = (128u64 << 20).to_string();
+        assert!(line("Max address space").contains(&address), "{limits}");
     }
 }
