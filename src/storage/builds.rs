@@ -146,25 +146,23 @@ mod tests {
     use crate::storage::bots::{NewVersion, build_status};
     use crate::storage::test_support::backends;
 
+    /// A version with a build command.
+    fn with_build() -> NewVersion<'static> {
+        NewVersion {
+            command: "./bot",
+            dir: "",
+            files_sha256: "s",
+            file_count: 1,
+            build_command: Some("make"),
+            env: &[],
+            bundle_sha256: None,
+        }
+    }
+
     #[tokio::test]
     async fn versions_with_a_build_wait_for_it_and_a_failed_build_fails_their_matches() {
         for (db, _guard) in backends().await {
-            let v = db
-                .create_bot(
-                    "c-bot",
-                    "h",
-                    &NewVersion {
-                        command: "./bot",
-                        dir: "/x",
-                        files_sha256: "s",
-                        file_count: 1,
-                        build_command: Some("make"),
-                        env: &[],
-                        bundle_sha256: None,
-                    },
-                )
-                .await
-                .unwrap();
+            let v = db.create_bot("c-bot", "h", &with_build()).await.unwrap();
             assert_eq!(v.build_status, build_status::BUILDING);
             let maze = crate::storage::test_support::bot_and_maze(&db).await.1;
             let m = db.queue_match(v.bot_version_id, maze, 1).await.unwrap();
@@ -213,21 +211,7 @@ mod tests {
             assert!(v.build_log.unwrap().contains("no such file"));
 
             // A build that worked: the version plays from its built bundle.
-            let v2 = db
-                .add_bot_version(
-                    v.bot_id,
-                    &NewVersion {
-                        command: "./bot",
-                        dir: "",
-                        files_sha256: "s",
-                        file_count: 1,
-                        build_command: Some("make"),
-                        env: &[],
-                        bundle_sha256: None,
-                    },
-                )
-                .await
-                .unwrap();
+            let v2 = db.add_bot_version(v.bot_id, &with_build()).await.unwrap();
             let m2 = db.queue_match(v2.bot_version_id, maze, 1).await.unwrap();
             db.claim_build("w1", 60_000).await.unwrap().unwrap();
             db.put_bundle(&crate::storage::bundles::NewBundle {

@@ -227,56 +227,48 @@ async fn the_readme_scale_out_example_runs_as_written_on_postgresql() {
     }
     let base = format!("http://127.0.0.1:{port}");
     let client = reqwest::Client::new();
+    // The answer's JSON (Null when there is none yet).
+    let answer = |req: reqwest::RequestBuilder| async move {
+        match req.send().await {
+            Ok(resp) => resp.json::<serde_json::Value>().await.unwrap_or_default(),
+            Err(_) => serde_json::Value::Null,
+        }
+    };
     let deadline = Instant::now() + Duration::from_secs(60);
-    while client.get(format!("{base}/healthz")).send().await.is_err() {
+    while answer(client.get(format!("{base}/healthz")))
+        .await
+        .is_null()
+    {
         assert!(Instant::now() < deadline, "the API server did not come up");
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
-    let bot: serde_json::Value = client
-        .post(format!("{base}/api/bots"))
-        .json(
-            &serde_json::json!({"name": "simple", "command": "python3 simple_bot.py",
-            "files": crate::support::simple_bot_files()}),
-        )
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
-    let queued: serde_json::Value = client
-        .post(format!("{base}/api/matches"))
-        .bearer_auth(bot["owner_token"].as_str().unwrap())
-        .json(&serde_json::json!({"bot_id": bot["bot_id"], "maze_id": 1}))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let bot = answer(
+        client
+            .post(format!("{base}/api/bots"))
+            .json(&serde_json::json!({
+        "name": "simple", "command": "python3 simple_bot.py",
+        "files": crate::support::simple_bot_files()})),
+    )
+    .await;
+    let queued = answer(
+        client
+            .post(format!("{base}/api/matches"))
+            .bearer_auth(
+                bot["owner_token"]
+                    .as_str()
+                    .unwrap_or_else(|| panic!("{bot}")),
+            )
+            .json(&serde_json::json!({"bot_id": bot["bot_id"], "maze_id": 1})),
+    )
+    .await;
     let id = queued["match_id"]
         .as_i64()
         .unwrap_or_else(|| panic!("{queued}"));
     let deadline = Instant::now() + Duration::from_secs(60);
     let (played, health) = loop {
-        let m: serde_json::Value = client
-            .get(format!("{base}/api/matches/{id}"))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let m = answer(client.get(format!("{base}/api/matches/{id}"))).await;
         if m["status"] != "queued" && m["status"] != "running" {
-            let health: serde_json::Value = client
-                .get(format!("{base}/healthz"))
-                .send()
-                .await
-                .unwrap()
-                .json()
-                .await
-                .unwrap();
-            break (m, health);
+            break (m, answer(client.get(format!("{base}/healthz"))).await);
         }
         assert!(Instant::now() < deadline, "the match was not played: {m}");
         tokio::time::sleep(Duration::from_millis(100)).await;
