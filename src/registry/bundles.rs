@@ -95,24 +95,30 @@ pub async fn unpack_stored(storage: &Storage, sha256: &str, dest: &Path) -> Resu
         RegistryError::NotFound(format!("the bundle {sha256} is not in the database"))
     })?;
     let (dest, sha) = (dest.to_path_buf(), sha256.to_owned());
-    blocking(move || {
-        let summary = botfiles::unpack_archive(&archive, &dest, &BundleLimits::default()).map_err(
-            |e| match e.is_client_error() {
+    blocking(move || unpack_checked(&archive, &dest, &sha)).await?
+}
+
+/// Unpacks a stored bundle's `archive` into `dest` (an existing empty folder) and
+/// checks that its files give `sha256`: [`RegistryError::Corrupt`] when they do not or
+/// the archive cannot be unpacked (`dest` is then left empty by the unpacker, or
+/// holds the refused files for the caller to remove).
+pub(super) fn unpack_checked(archive: &[u8], dest: &Path, sha256: &str) -> Result<BundleSummary> {
+    let summary =
+        botfiles::unpack_archive(archive, dest, &BundleLimits::default()).map_err(|e| {
+            match e.is_client_error() {
                 true => RegistryError::Corrupt(format!(
-                    "the stored bundle {sha} cannot be unpacked: {e}"
+                    "the stored bundle {sha256} cannot be unpacked: {e}"
                 )),
                 false => e.into(),
-            },
-        )?;
-        if summary.sha256 != sha {
-            return Err(RegistryError::Corrupt(format!(
-                "the stored bundle {sha} holds files whose hash is {}: refused",
-                summary.sha256
-            )));
-        }
-        Ok(summary)
-    })
-    .await?
+            }
+        })?;
+    if summary.sha256 != sha256 {
+        return Err(RegistryError::Corrupt(format!(
+            "the stored bundle {sha256} holds files whose hash is {}: refused",
+            summary.sha256
+        )));
+    }
+    Ok(summary)
 }
 
 async fn put(storage: &Storage, packed: &Packed) -> Result<()> {

@@ -19,7 +19,6 @@ use nix::fcntl::{Flock, FlockArg};
 
 use super::bundles::blocking;
 use super::{RegistryError, Result};
-use crate::botfiles::{self, BundleLimits};
 use crate::storage::Storage;
 
 /// Default size of a cache: 2 GiB of unpacked files.
@@ -116,25 +115,13 @@ impl BundleCache {
             fs::remove_dir_all(&dir).map_err(|e| local("clear", e))?;
         }
         fs::create_dir(&dir).map_err(|e| local("create", e))?;
-        let summary = match botfiles::unpack_archive(archive, &dir, &BundleLimits::default()) {
+        let summary = match super::bundles::unpack_checked(archive, &dir, sha) {
             Ok(s) => s,
             Err(e) => {
                 let _ = fs::remove_dir_all(&dir);
-                let what = format!("the stored bundle {sha} cannot be unpacked: {e}");
-                return Err(if e.is_client_error() {
-                    RegistryError::Corrupt(what)
-                } else {
-                    RegistryError::Internal(what)
-                });
+                return Err(e);
             }
         };
-        if summary.sha256 != sha {
-            let _ = fs::remove_dir_all(&dir);
-            return Err(RegistryError::Corrupt(format!(
-                "the stored bundle {sha} holds files whose hash is {}: refused",
-                summary.sha256
-            )));
-        }
         fs::write(self.ready_path(sha), summary.bytes.to_string())
             .map_err(|e| local("mark complete", e))?;
         self.evict(sha);
@@ -203,7 +190,7 @@ impl BundleCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::botfiles::{pack_dir, skip_nothing};
+    use crate::botfiles::{BundleLimits, pack_dir, skip_nothing};
     use crate::storage::bundles::NewBundle;
     use crate::storage::test_support;
 

@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 
 use super::Result;
 use super::bundles::store_dir;
-use crate::botfiles::{BundleLimits, hash_dir, skip_nothing};
 use crate::storage::Storage;
 use crate::storage::bots::BotVersionRow;
 
@@ -73,17 +72,9 @@ async fn migrate_version(
     if !dir.is_dir() {
         return Err(format!("its folder {} is missing", dir.display()));
     }
-    let folder = dir.to_path_buf();
-    let hashed = super::bundles::blocking(move || {
-        hash_dir(&folder, &BundleLimits::default(), &skip_nothing)
-    })
-    .await
-    .map_err(|e| e.to_string())?
-    .map_err(|e| e.to_string())?;
     let stored = store_dir(storage, dir, scratch)
         .await
         .map_err(|e| e.to_string())?;
-    debug_assert_eq!(hashed, stored);
     let (bundle, built) = if stored.sha256 == v.files_sha256 {
         (Some(stored.sha256.as_str()), None)
     } else {
@@ -98,7 +89,7 @@ async fn migrate_version(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::botfiles::write_files;
+    use crate::botfiles::{BundleLimits, write_files};
     use crate::registry::cache::BundleCache;
     use crate::storage::bots::{NewVersion, build_status};
     use crate::storage::test_support;
