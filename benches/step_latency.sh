@@ -10,7 +10,12 @@
 #     the steps (the process's start and exit, the sandbox's set-up and tear-down, the
 #     bot's start) is the same in both, so
 #       per step = (whole run with 900 more steps - whole run) / 900,
-#     each whole run timed from the process's start to its exit; and
+#     each whole run timed from the process's start to its exit;
+#       bot's clock = the mean time from one sense to the next over the idle steps, as the
+#                  bot itself clocks them (benches/trivial_bot.c): a whole step (answer,
+#                  the referee's work, the next sense) with nothing of the start or the
+#                  end in it, so without the run-to-run noise of the sandbox's set-up
+#                  that the difference carries; and
 #       exchange = the mean answer time the referee measures over the idle steps (sense
 #                  written to answer read), the rest of a step being the referee's own
 #                  work.
@@ -33,7 +38,7 @@ import json, sys
 path = [json.dumps(a, separators=(",", ":")) for a in json.load(sys.stdin)["actions"]]
 print("\n".join(path + ["{\"reset\":true}"] + path))' >"$tmp/bot/script.txt"
 
-run_match() { # $1: sandbox, $2: idle steps; prints "whole_us exchange_us steps"
+run_match() { # $1: sandbox, $2: idle steps; prints "whole_us exchange_us steps bot_clock_us"
   local a b
   a=$(date +%s%N)
   ./target/release/mazearena run --maze "$maze" --bot "./trivial_bot script.txt $2" \
@@ -46,7 +51,10 @@ idle = int(sys.argv[3])
 t = r["trace"]
 assert r["status"] == "finished", r["status"]
 exchange = sum(s["answer_us"] for s in t[1:idle]) / max(idle - 1, 1)
-print(f"{sys.argv[2]} {exchange:.1f} {len(t)}")
+clock = [l.split()[1] for s in t for l in s.get("stderr", []) if l.startswith("idle_step_ns ")]
+assert clock or idle <= 2, "the bot wrote no idle_step_ns line"
+inside = int(clock[0]) / 1000 if clock else 0.0
+print(f"{sys.argv[2]} {exchange:.1f} {len(t)} {inside:.2f}")
 PY
 }
 
@@ -55,9 +63,9 @@ for _ in $(seq "$RUNS"); do
   echo "split $("$tmp/pingpong" split)"
   for s in none full; do
     read -r short _ n0 < <(run_match "$s" 0)
-    read -r long exchange n1 < <(run_match "$s" "$IDLE")
+    read -r long exchange n1 inside < <(run_match "$s" "$IDLE")
     [ $((n1 - n0)) = "$IDLE" ] || { echo "expected $IDLE more steps: $n0, $n1" >&2; exit 1; }
-    echo "$s $short $long $exchange"
+    echo "$s $short $long $exchange $inside"
   done
 done >"$tmp/all.txt"
 
@@ -78,9 +86,11 @@ split = med("split", lambda r: r[0])
 print(f"| pipe round trip, two cores | {split:.1f} | {split / floor:.1f} |")
 for k, name in (("none", "--sandbox none"), ("full", "--sandbox full")):
     step = med(k, lambda r: (r[1] - r[0]) / idle)
+    inside = med(k, lambda r: r[3])
     exchange = med(k, lambda r: r[2])
     short = med(k, lambda r: r[0]) / 1000
-    print(f"| `mazearena run` {name}: per step | {step:.1f} | {step / floor:.1f} |")
+    print(f"| `mazearena run` {name}: per step, the bot's clock | {inside:.1f} | {inside / floor:.1f} |")
+    print(f"| `mazearena run` {name}: per step, difference of whole runs | {step:.1f} | {step / floor:.1f} |")
     print(f"| `mazearena run` {name}: exchange (answer time) | {exchange:.1f} | {exchange / floor:.1f} |")
     print(f"| `mazearena run` {name}: the 85-step match, whole run | {short:.1f} ms | |")
 PY

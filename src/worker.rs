@@ -239,14 +239,23 @@ impl Reporter {
         }
     }
 
+    /// Reports that the pool is alive; registers it again when its row is missing (its
+    /// first registration failed, e.g. while the database restarted), so a worker that
+    /// started during an outage still shows up once the database is back.
     async fn seen(&self) {
-        if self.role.is_some()
-            && let Err(e) = self
-                .storage
-                .worker_seen(&self.owner, self.done_count.load(Ordering::Relaxed))
-                .await
+        if self.role.is_none() {
+            return;
+        }
+        match self
+            .storage
+            .worker_seen(&self.owner, self.done_count.load(Ordering::Relaxed))
+            .await
         {
-            tracing::error!(cause = %e, "could not report this worker in the database");
+            Ok(true) => {}
+            Ok(false) => self.register().await,
+            Err(e) => {
+                tracing::error!(cause = %e, "could not report this worker in the database");
+            }
         }
     }
 }

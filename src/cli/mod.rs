@@ -50,15 +50,21 @@ pub enum Command {
     Match(matches::MatchCommand),
 }
 
-/// The jail step inside the sandbox, when this process was started as
-/// `mazearena sandbox-exec ...` (never returns then, unless it failed: see
-/// [`sandbox::sandbox_exec`]); `None` for every other command line.
+/// A step of the sandbox, when this process was started as `mazearena sandbox-exec ...`
+/// (the jail inside it: [`sandbox::sandbox_exec`]) or `mazearena sandbox-enter ...` (the
+/// cgroup join before it: [`sandbox::sandbox_enter`]). Neither returns, unless it failed;
+/// `None` for every other command line.
 pub fn sandbox_exec_if_asked() -> Option<std::process::ExitCode> {
+    use crate::runner::sandbox::{ENTER_SUBCOMMAND, JAIL_SUBCOMMAND};
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    (args
-        .get(1)
-        .is_some_and(|a| a == crate::runner::sandbox::JAIL_SUBCOMMAND))
-    .then(|| sandbox::sandbox_exec(&args[2..]))
+    let step = args.get(1)?;
+    if step == JAIL_SUBCOMMAND {
+        Some(sandbox::sandbox_exec(&args[2..]))
+    } else if step == ENTER_SUBCOMMAND {
+        Some(sandbox::sandbox_enter(&args[2..]))
+    } else {
+        None
+    }
 }
 
 /// Parses the command line and runs it.

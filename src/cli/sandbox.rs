@@ -6,7 +6,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 
 use crate::runner::Sandbox;
-use crate::runner::sandbox::{Check, jail};
+use crate::runner::sandbox::{Check, enter, jail};
 
 /// How bots are isolated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -92,6 +92,17 @@ pub fn doctor(args: DoctorArgs) -> anyhow::Result<()> {
 pub fn sandbox_exec(args: &[std::ffi::OsString]) -> std::process::ExitCode {
     let reason = match jail::JailArgs::parse(args) {
         Ok(a) => jail::exec(&a),
+        Err(e) => e,
+    };
+    eprintln!("mazearena sandbox: {reason}");
+    std::process::ExitCode::from(jail::SETUP_FAILED as u8)
+}
+
+/// `mazearena sandbox-enter ARGS`: joins the match's cgroup, then runs bubblewrap (not
+/// for people). Returns only on failure, with exit status [`jail::SETUP_FAILED`].
+pub fn sandbox_enter(args: &[std::ffi::OsString]) -> std::process::ExitCode {
+    let reason = match enter::EnterArgs::parse(args) {
+        Ok(a) => enter::exec(&a),
         Err(e) => e,
     };
     eprintln!("mazearena sandbox: {reason}");

@@ -131,7 +131,7 @@ pub async fn build_logged(
                 command: words.iter().map(Into::into).collect(),
                 ..jail::JailArgs::default()
             };
-            tokio::process::Command::from(full.command(args, &jail))
+            tokio::process::Command::from(full.command(args, &jail, cgroup.as_ref()))
         }
     };
     // One pipe for stdout and stderr, so the log keeps their order.
@@ -142,15 +142,6 @@ pub async fn build_logged(
         .stderr(writer2)
         .process_group(0)
         .kill_on_drop(true);
-    let join = cgroup
-        .as_ref()
-        .map(super::sandbox::cgroup::MatchCgroup::join_fds)
-        .unwrap_or_default();
-    // SAFETY: the closure runs in the child between fork and exec and only calls
-    // write(2) on fds opened before the fork (async-signal-safe, no allocation).
-    unsafe {
-        cmd.pre_exec(move || super::sandbox::cgroup::join_now(&join));
-    }
     let mut child = cmd.spawn().map_err(spawn_err)?;
     // Our copies of the pipe's write end went with `cmd`: drop it so the read ends.
     drop(cmd);

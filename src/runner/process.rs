@@ -1,5 +1,6 @@
 //! Starting a bot process and ending it. With [`Sandbox::Full`] the process is
-//! bubblewrap, which builds the bot's world and runs it through the jail step; with
+//! bubblewrap (after `mazearena sandbox-enter` has put it in the match's cgroup), which
+//! builds the bot's world and runs it through the jail step; with
 //! [`Sandbox::None`] it is the bot itself. Either way it gets piped stdio, its own
 //! process group and a small environment, and every process it makes is killed when the
 //! match is over (by its cgroup, its PID namespace, and a kill of its tree and group).
@@ -11,7 +12,7 @@ use nix::sys::signal::{Signal, killpg};
 use nix::unistd::Pid;
 use tokio::process::{Child, Command};
 
-use super::sandbox::cgroup::{self, CgroupHit, CgroupLimits, MatchCgroup};
+use super::sandbox::cgroup::{CgroupHit, CgroupLimits, MatchCgroup};
 use super::sandbox::{Sandbox, UidLease, jail, proctree};
 
 /// Environment variables passed through to bots run without the sandbox; everything
@@ -161,7 +162,8 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                     .chain(words[1..].iter().map(Into::into))
                     .collect(),
             };
-            (Command::from(full.command(args, &jail)), cgroup, uid)
+            let cmd = full.command(args, &jail, cgroup.as_ref());
+            (Command::from(cmd), cgroup, uid)
         }
     };
     cmd.stdin(Stdio::piped())
@@ -169,25 +171,14 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
         .stderr(Stdio::piped())
         .process_group(0)
         .kill_on_drop(true);
-    let join = cgroup
-        .as_ref()
-        .map(MatchCgroup::join_fds)
-        .unwrap_or_default();
     let per_process = match launch.sandbox {
         Sandbox::None => Some((MAX_BOT_FILE_BYTES, launch.memory_limit_bytes.map(|b| b * 2))),
         Sandbox::Full(_) => None,
     };
-    if !join.is_empty() {
-        // SAFETY: the closure runs in the child between fork and exec; it only calls
-        // write(2) on fds opened before the fork, which is async-signal-safe, and
-        // allocates nothing.
-        unsafe {
-            cmd.pre_exec(move || cgroup::join_now(&join));
-        }
-    }
-    // Without a closure to run before exec, the bot starts with posix_spawn (vfork), which
-    // does not copy the server's page tables: a fork would make every other match
-    // thread of the server take copy-on-write faults. Its limits are set right after.
+    // Nothing runs between fork and exec, so the bot (or `sandbox-enter`, which joins
+    // its cgroup) starts with posix_spawn (vfork), which does not copy the server's
+    // page tables: a fork would make every other match thread of the server take
+    // copy-on-write faults. Its limits are set right after.
     let child = cmd.spawn().map_err(|source| LaunchError::Spawn {
         program: words[0].clone(),
         dir: launch.dir.display().to_string(),

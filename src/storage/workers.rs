@@ -74,17 +74,19 @@ impl Storage {
     }
 
     /// A running worker's report: it is alive and has recorded `matches_done` matches.
+    /// False when the worker has no row (its registration never got through).
     ///
     /// # Errors
     /// Database failures.
-    pub async fn worker_seen(&self, worker_id: &str, matches_done: i64) -> Result<()> {
-        sqlx::query("update worker set last_seen = $1, matches_done = $2 where worker_id = $3")
-            .bind(now_ms())
-            .bind(matches_done)
-            .bind(worker_id)
-            .execute(self.pool())
-            .await?;
-        Ok(())
+    pub async fn worker_seen(&self, worker_id: &str, matches_done: i64) -> Result<bool> {
+        let done =
+            sqlx::query("update worker set last_seen = $1, matches_done = $2 where worker_id = $3")
+                .bind(now_ms())
+                .bind(matches_done)
+                .bind(worker_id)
+                .execute(self.pool())
+                .await?;
+        Ok(done.rows_affected() > 0)
     }
 
     /// Records that a worker stopped gracefully.
@@ -136,8 +138,9 @@ mod tests {
                 jobs: 2,
                 sandbox: "full",
             };
+            assert!(!db.worker_seen("w1", 4).await.unwrap(), "no row yet");
             db.register_worker(&w).await.unwrap();
-            db.worker_seen("w1", 5).await.unwrap();
+            assert!(db.worker_seen("w1", 5).await.unwrap());
             let live = db.live_workers(60_000).await.unwrap();
             assert_eq!(live.len(), 1);
             assert_eq!((live[0].jobs, live[0].matches_done), (2, 5));

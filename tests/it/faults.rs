@@ -89,6 +89,20 @@ impl Drop for Proc {
     }
 }
 
+/// The end of each process's log, for a failure's message.
+fn log_tails(procs: &[Proc]) -> String {
+    procs
+        .iter()
+        .map(|p| {
+            let log = std::fs::read_to_string(&p.log).unwrap_or_default();
+            let lines: Vec<&str> = log.lines().collect();
+            let tail = lines[lines.len().saturating_sub(20)..].join("\n");
+            format!("--- {} (pid {}):\n{tail}", p.name, p.child.id())
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 fn spawn(args: &[String], log: &Path) -> Child {
     let out = std::fs::OpenOptions::new()
         .create(true)
@@ -447,7 +461,8 @@ fn tournaments_survive_killed_servers_workers_and_database() {
                 }
                 assert!(
                     Instant::now() < deadline,
-                    "{workers} live workers: {health}"
+                    "{workers} live workers: {health}\n{}",
+                    log_tails(&procs)
                 );
                 tokio::time::sleep(Duration::from_millis(200)).await;
             }

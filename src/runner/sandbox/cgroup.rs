@@ -1,14 +1,12 @@
 //! Whole-match limits with control groups (v1 or v2): one cgroup per match that holds
 //! every process of the bot, with a memory limit (resident, all processes together), a
 //! process/thread limit, a CPU quota of one core (so a bot's helpers cannot slow another
-//! match) and a CPU-time counter. The bot's outer process joins it before it `exec`s, so
-//! no process of the bot is ever outside it.
+//! match) and a CPU-time counter. The bot's outer process (`mazearena sandbox-enter`) joins it
+//! before it `exec`s bubblewrap, so no process of the bot is ever outside it.
 //!
 //! Match cgroups are made under this server's own cgroup (read from `/proc/self/cgroup`),
 //! in a folder `mazearena`, so an operator's limits on the server also bound its bots.
 
-use std::fs::{File, OpenOptions};
-use std::os::fd::{AsRawFd, RawFd};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -146,7 +144,6 @@ impl CgroupRoot {
         );
         let mut group = MatchCgroup {
             dirs: Vec::new(),
-            procs: Vec::new(),
             version: self.clone(),
             memory: PathBuf::new(),
             pids: PathBuf::new(),
@@ -237,7 +234,6 @@ fn write(dir: &Path, file: &str, value: u64) -> std::io::Result<()> {
 #[derive(Debug)]
 pub struct MatchCgroup {
     dirs: Vec<PathBuf>,
-    procs: Vec<File>,
     version: CgroupRoot,
     memory: PathBuf,
     pids: PathBuf,
@@ -260,18 +256,13 @@ impl MatchCgroup {
         }
         made.map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.display())))?;
         self.dirs.push(dir.to_path_buf());
-        self.procs.push(
-            OpenOptions::new()
-                .write(true)
-                .open(dir.join("cgroup.procs"))?,
-        );
         Ok(dir.to_path_buf())
     }
 
-    /// Open `cgroup.procs` files: writing `0` to each moves the writing process in.
-    /// Done by the bot's outer process between fork and exec (see `process::spawn`).
-    pub fn join_fds(&self) -> Vec<RawFd> {
-        self.procs.iter().map(AsRawFd::as_raw_fd).collect()
+    /// Its `cgroup.procs` files, one per hierarchy: writing `0` to each moves the
+    /// writing process in. Done by `sandbox-enter` before it runs bubblewrap.
+    pub fn procs_files(&self) -> Vec<PathBuf> {
+        self.dirs.iter().map(|d| d.join("cgroup.procs")).collect()
     }
 
     /// CPU time used by every process that ever ran in the cgroup, in microseconds.
@@ -337,7 +328,6 @@ impl MatchCgroup {
 impl Drop for MatchCgroup {
     fn drop(&mut self) {
         self.kill_all();
-        self.procs.clear();
         for dir in self.dirs.iter().rev() {
             // A dying process may hold the cgroup for a moment.
             for _ in 0..200 {
@@ -466,20 +456,6 @@ fn detect_v2(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
     ensure_dir(&base)?;
     enable(&base).map_err(|e| format!("cannot enable controllers in {}: {e}", base.display()))?;
     Ok(CgroupRoot::V2 { base })
-}
-
-/// Writes `0` to each fd: moves the calling process into those cgroups. Only
-/// async-signal-safe calls, for use between fork and exec.
-pub fn join_now(fds: &[RawFd]) -> std::io::Result<()> {
-    for &fd in fds {
-        // SAFETY: `fd` is an open cgroup.procs file owned by the MatchCgroup, which
-        // outlives the spawn; write(2) is async-signal-safe.
-        let n = unsafe { libc::write(fd, b"0".as_ptr().cast(), 1) };
-        if n != 1 {
-            return Err(std::io::Error::last_os_error());
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 //! [`Sandbox::None`] runs the bot directly as the server's user: only for bots you trust.
 
 pub mod cgroup;
+pub mod enter;
 pub mod jail;
 pub mod proctree;
 pub mod seccomp;
@@ -35,6 +36,9 @@ pub const WORKDIR: &str = "/sandbox/work";
 
 /// The subcommand of the helper that runs [`jail::exec`].
 pub const JAIL_SUBCOMMAND: &str = "sandbox-exec";
+
+/// The subcommand of the helper that runs [`enter::exec`].
+pub const ENTER_SUBCOMMAND: &str = "sandbox-enter";
 
 /// How bots are isolated.
 #[derive(Debug, Clone, Default)]
@@ -68,16 +72,38 @@ pub struct FullSandbox {
 impl FullSandbox {
     /// The command that runs `jail` inside a sandbox made with bubblewrap arguments
     /// `bwrap_args` (from [`view::bwrap_args`]), with an empty environment of its own.
+    /// With a `cgroup`, it starts as `mazearena sandbox-enter` ([`enter`]), which joins
+    /// the cgroup before it runs bubblewrap: nothing needs to run in the server between
+    /// `fork` and `exec`, so the command can start with `posix_spawn`.
     pub fn command(
         &self,
         bwrap_args: Vec<std::ffi::OsString>,
         jail: &jail::JailArgs,
+        cgroup: Option<&cgroup::MatchCgroup>,
     ) -> std::process::Command {
-        let mut cmd = std::process::Command::new(&self.bwrap);
-        cmd.args(bwrap_args)
-            .arg(JAIL_SUBCOMMAND)
-            .args(jail.to_args())
-            .env_clear();
+        let tail = bwrap_args
+            .into_iter()
+            .chain(std::iter::once(JAIL_SUBCOMMAND.into()))
+            .chain(jail.to_args());
+        let mut cmd = match cgroup {
+            None => {
+                let mut cmd = std::process::Command::new(&self.bwrap);
+                cmd.args(tail);
+                cmd
+            }
+            Some(cgroup) => {
+                let enter = enter::EnterArgs {
+                    join: cgroup.procs_files(),
+                    command: std::iter::once(self.bwrap.clone().into_os_string())
+                        .chain(tail)
+                        .collect(),
+                };
+                let mut cmd = std::process::Command::new(&self.helper);
+                cmd.arg(ENTER_SUBCOMMAND).args(enter.to_args());
+                cmd
+            }
+        };
+        cmd.env_clear();
         cmd
     }
 }
@@ -165,7 +191,7 @@ impl Sandbox {
             ..jail::JailArgs::default()
         };
         let out = full
-            .command(args, &jail)
+            .command(args, &jail, None)
             .stdin(std::process::Stdio::null())
             .output()
             .map_err(|e| Unavailable(format!("cannot run {}: {e}", full.bwrap.display())))?;

@@ -1,0 +1,130 @@
+//! The first step of a sandboxed bot, run as `mazearena sandbox-enter` outside the
+//! sandbox: it moves itself into the match's cgroups, then `exec`s bubblewrap, so every
+//! process of the sandbox, bubblewrap's own included, starts inside them.
+//!
+//! Joining from a process of its own, rather than in the server between `fork` and
+//! `exec`, lets the server start it with `posix_spawn` (vfork): a fork of the server
+//! would copy its page tables and make its other match threads take copy-on-write
+//! faults. (cgroup v1 has no `CLONE_INTO_CGROUP`.)
+
+use std::ffi::OsString;
+use std::io::Write;
+use std::os::unix::process::CommandExt;
+use std::path::PathBuf;
+
+/// What `sandbox-enter` is asked to do (its command line).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct EnterArgs {
+    /// The `cgroup.procs` files to join, in order.
+    pub join: Vec<PathBuf>,
+    /// The program to run then (bubblewrap) and its arguments.
+    pub command: Vec<OsString>,
+}
+
+impl EnterArgs {
+    /// The arguments after `sandbox-enter`.
+    pub fn to_args(&self) -> Vec<OsString> {
+        let mut out = Vec::with_capacity(2 * self.join.len() + 1 + self.command.len());
+        for path in &self.join {
+            out.push("--join".into());
+            out.push(path.clone().into_os_string());
+        }
+        out.push("--".into());
+        out.extend(self.command.iter().cloned());
+        out
+    }
+
+    /// Parses the arguments after `sandbox-enter`.
+    ///
+    /// # Errors
+    /// A message naming the bad argument.
+    pub fn parse(args: &[OsString]) -> Result<EnterArgs, String> {
+        let mut out = EnterArgs::default();
+        let mut i = 0;
+        loop {
+            let Some(name) = args.get(i) else {
+                return Err("no command after --".into());
+            };
+            if name == "--" {
+                out.command = args[i + 1..].to_vec();
+                break;
+            }
+            if name != "--join" {
+                return Err(format!("unknown argument {}", name.to_string_lossy()));
+            }
+            let path = args.get(i + 1).ok_or("--join needs a path")?;
+            out.join.push(PathBuf::from(path));
+            i += 2;
+        }
+        if out.command.is_empty() {
+            return Err("no command after --".into());
+        }
+        Ok(out)
+    }
+}
+
+/// Joins the cgroups and runs the command in place of this process. Returns only when
+/// that failed, with the reason.
+pub fn exec(args: &EnterArgs) -> String {
+    for path in &args.join {
+        let joined = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .and_then(|mut f| f.write_all(b"0"));
+        if let Err(e) = joined {
+            return format!("cannot join the match's cgroup {}: {e}", path.display());
+        }
+    }
+    let err = std::process::Command::new(&args.command[0])
+        .args(&args.command[1..])
+        .exec();
+    format!("could not start {:?}: {err}", args.command[0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arguments_round_trip() {
+        let args = EnterArgs {
+            join: vec!["/sys/fs/cgroup/memory/m/cgroup.procs".into(), "/x y".into()],
+            command: vec!["/usr/bin/bwrap".into(), "--".into(), "--join".into()],
+        };
+        assert_eq!(EnterArgs::parse(&args.to_args()), Ok(args));
+    }
+
+    #[test]
+    fn bad_arguments_are_named() {
+        let parse = |words: &[&str]| {
+            EnterArgs::parse(&words.iter().map(OsString::from).collect::<Vec<_>>())
+        };
+        assert_eq!(parse(&["--join"]), Err("--join needs a path".into()));
+        assert_eq!(
+            parse(&["--cgroup", "x"]),
+            Err("unknown argument --cgroup".into())
+        );
+        assert_eq!(parse(&["--join", "p"]), Err("no command after --".into()));
+        assert_eq!(parse(&["--"]), Err("no command after --".into()));
+    }
+
+    #[test]
+    fn a_cgroup_that_cannot_be_joined_stops_it_before_the_command() {
+        let dir = tempfile::tempdir().unwrap();
+        let marker = dir.path().join("ran");
+        let args = EnterArgs {
+            join: vec![dir.path().join("missing/cgroup.procs")],
+            command: vec![
+                "sh".into(),
+                "-c".into(),
+                format!("touch {}", marker.display()).into(),
+            ],
+        };
+        let reason = exec(&args);
+        assert!(
+            reason.starts_with("cannot join the match's cgroup"),
+            "{reason}"
+        );
+        assert!(!marker.exists());
+    }
+}
