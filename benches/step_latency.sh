@@ -62,7 +62,7 @@ for _ in $(seq "$RUNS"); do
   echo "same $("$tmp/pingpong" same)"
   echo "split $("$tmp/pingpong" split)"
   for s in none full; do
-    read -r short _ n0 < <(run_match "$s" 0)
+    read -r short _ n0 _ < <(run_match "$s" 0)
     read -r long exchange n1 inside < <(run_match "$s" "$IDLE")
     [ $((n1 - n0)) = "$IDLE" ] || { echo "expected $IDLE more steps: $n0, $n1" >&2; exit 1; }
     echo "$s $short $long $exchange $inside"
