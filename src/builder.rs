@@ -39,12 +39,8 @@ pub struct Builder {
 
 /// How a claimed build ended.
 enum Ended {
-    /// Record it: `ok` with the built bundle, and the log.
-    Done {
-        ok: bool,
-        built: Option<String>,
-        log: String,
-    },
+    /// Record it, with the log: `ready` with its built bundle, else `build_failed`.
+    Done { built: Option<String>, log: String },
     /// Not recorded (the lease was lost, or the database or disk failed): the build is
     /// claimed again once its lease expires.
     Dropped,
@@ -81,7 +77,8 @@ impl Builder {
                 _ = stop.cancelled() => return,
                 ended = self.build_renewing(&version) => ended,
             };
-            if let Ended::Done { ok, built, log } = ended {
+            if let Ended::Done { built, log } = ended {
+                let ok = built.is_some();
                 tracing::info!(bot_version_id = id, ok, "build ended");
                 match self
                     .storage
@@ -127,7 +124,6 @@ impl Builder {
         let command = version.build_command.clone().unwrap_or_default();
         let Some(sha) = &version.bundle_sha256 else {
             return Ended::Done {
-                ok: false,
                 built: None,
                 log: "the version's files are not stored in the database (an old data folder \
                       that could not be moved): upload it again"
@@ -165,25 +161,16 @@ impl Builder {
             Err(e) => (false, e.to_string()),
         };
         if !ok {
-            return Ended::Done {
-                ok,
-                built: None,
-                log,
-            };
+            return Ended::Done { built: None, log };
         }
         match registry::bundles::store_dir(&self.storage, &dir, &self.scratch).await {
             Ok(summary) => Ended::Done {
-                ok: true,
                 built: Some(summary.sha256),
                 log,
             },
             Err(RegistryError::Bundle(e)) if e.is_client_error() => {
                 log.push_str(&format!("\n[the built folder cannot be stored: {e}]"));
-                Ended::Done {
-                    ok: false,
-                    built: None,
-                    log,
-                }
+                Ended::Done { built: None, log }
             }
             Err(e) => {
                 tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "cannot store a built folder");

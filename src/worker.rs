@@ -372,19 +372,21 @@ impl Worker {
         }
     }
 
+    /// Records a claimed match as crashed for a reason of the server's (it is never
+    /// retried); a failure to record it leaves it to its lease.
+    async fn give_up(&self, match_id: i64, reason: &str) {
+        if let Err(e) = self.storage.fail_match(match_id, &self.owner, reason).await {
+            tracing::error!(cause = %e, "could not record the match as crashed; its lease will expire");
+        }
+    }
+
     #[tracing::instrument(skip_all, fields(match_id = job.match_id))]
     async fn play(&self, job: ClaimedMatch) {
         let maze = match mazefile::numeric::parse(job.layout.as_bytes()) {
             Ok(m) => m,
             Err(e) => {
                 tracing::error!(cause = %e, "stored maze layout is invalid; match marked crashed");
-                let _ = self
-                    .storage
-                    .fail_match(
-                        job.match_id,
-                        &self.owner,
-                        &format!("stored maze is invalid: {e}"),
-                    )
+                self.give_up(job.match_id, &format!("stored maze is invalid: {e}"))
                     .await;
                 return;
             }
@@ -394,14 +396,8 @@ impl Worker {
             Err(e) if e.is_permanent() => {
                 // A bundle missing or damaged in the database: trying again cannot help.
                 tracing::error!(cause = %e, "the bot's stored files cannot be used; match marked crashed");
-                let _ = self
-                    .storage
-                    .fail_match(
-                        job.match_id,
-                        &self.owner,
-                        &format!("the server could not use the bot's stored files: {e}"),
-                    )
-                    .await;
+                let reason = format!("the server could not use the bot's stored files: {e}");
+                self.give_up(job.match_id, &reason).await;
                 return;
             }
             Err(e) => {

@@ -90,21 +90,24 @@ pub fn doctor(args: DoctorArgs) -> anyhow::Result<()> {
 /// `mazearena sandbox-exec ARGS`: the jail step inside the sandbox (not for people).
 /// Returns only on failure, with exit status [`jail::SETUP_FAILED`].
 pub fn sandbox_exec(args: &[std::ffi::OsString]) -> std::process::ExitCode {
-    let reason = match jail::JailArgs::parse(args) {
+    setup_failed(match jail::JailArgs::parse(args) {
         Ok(a) => jail::exec(&a),
         Err(e) => e,
-    };
-    eprintln!("mazearena sandbox: {reason}");
-    std::process::ExitCode::from(jail::SETUP_FAILED as u8)
+    })
 }
 
 /// `mazearena sandbox-enter ARGS`: joins the match's cgroup, then runs bubblewrap (not
 /// for people). Returns only on failure, with exit status [`jail::SETUP_FAILED`].
 pub fn sandbox_enter(args: &[std::ffi::OsString]) -> std::process::ExitCode {
-    let reason = match enter::EnterArgs::parse(args) {
+    setup_failed(match enter::EnterArgs::parse(args) {
         Ok(a) => enter::exec(&a),
         Err(e) => e,
-    };
+    })
+}
+
+/// A sandbox step's end when it could not run the bot: the line the runner reads the
+/// reason from, and [`jail::SETUP_FAILED`].
+fn setup_failed(reason: String) -> std::process::ExitCode {
     eprintln!("mazearena sandbox: {reason}");
     std::process::ExitCode::from(jail::SETUP_FAILED as u8)
 }

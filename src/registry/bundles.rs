@@ -84,6 +84,16 @@ pub async fn store_dir(storage: &Storage, dir: &Path, scratch: &Path) -> Result<
     Ok(packed.summary)
 }
 
+/// The stored archive of bundle `sha256`.
+///
+/// # Errors
+/// [`RegistryError::NotFound`] when the database does not hold it; the database.
+pub async fn fetch(storage: &Storage, sha256: &str) -> Result<Vec<u8>> {
+    storage.get_bundle(sha256).await?.ok_or_else(|| {
+        RegistryError::NotFound(format!("the bundle {sha256} is not in the database"))
+    })
+}
+
 /// Unpacks the stored bundle `sha256` into `dest` (an existing empty folder), checking
 /// its hash: for a build, which writes into its folder.
 ///
@@ -91,9 +101,7 @@ pub async fn store_dir(storage: &Storage, dir: &Path, scratch: &Path) -> Result<
 /// A bundle missing from the database or whose files do not give its hash; the local
 /// disk.
 pub async fn unpack_stored(storage: &Storage, sha256: &str, dest: &Path) -> Result<BundleSummary> {
-    let archive = storage.get_bundle(sha256).await?.ok_or_else(|| {
-        RegistryError::NotFound(format!("the bundle {sha256} is not in the database"))
-    })?;
+    let archive = fetch(storage, sha256).await?;
     let (dest, sha) = (dest.to_path_buf(), sha256.to_owned());
     blocking(move || unpack_checked(&archive, &dest, &sha)).await?
 }

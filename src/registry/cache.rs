@@ -78,9 +78,7 @@ impl BundleCache {
             let key = sha.clone();
             let filling = blocking(move || cache.lock(&key, FlockArg::LockExclusive)).await??;
             if !self.is_ready(&sha) {
-                let archive = storage.get_bundle(&sha).await?.ok_or_else(|| {
-                    RegistryError::NotFound(format!("the bundle {sha} is not in the database"))
-                })?;
+                let archive = super::bundles::fetch(storage, &sha).await?;
                 let cache = self.clone();
                 let key = sha.clone();
                 blocking(move || cache.fill(&key, &archive)).await??;
