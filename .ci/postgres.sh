@@ -6,6 +6,8 @@
 #                                         and prints `export MAZEARENA_TEST_POSTGRES=URL`
 #   .ci/postgres.sh restart DIR           stops it at once (as a crash would) and starts it
 #                                         again on the same port
+#   .ci/postgres.sh crash DIR             only stops it at once (as a crash would)
+#   .ci/postgres.sh resume DIR            starts a crashed cluster again on its port
 #   .ci/postgres.sh stop DIR              stops it (fast shutdown) and removes DIR
 #
 # The URL names the `postgres` superuser (trust authentication on 127.0.0.1 only), so a
@@ -40,7 +42,13 @@ start)
   echo "export MAZEARENA_TEST_POSTGRES_DIR=$dir"
   ;;
 restart)
+  "$0" crash "$dir"
+  "$0" resume "$dir"
+  ;;
+crash)
   as_postgres "$bindir/pg_ctl" -D "$dir/data" -m immediate -w stop >/dev/null
+  ;;
+resume)
   port=$(cat "$dir/port")
   as_postgres "$bindir/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w \
     -o "-p $port -c listen_addresses=127.0.0.1 -k $dir -c max_connections=200 -c fsync=off" start >/dev/null
@@ -52,7 +60,7 @@ stop)
   rm -rf "$dir"
   ;;
 *)
-  echo "usage: $0 start|restart|stop DIR" >&2
+  echo "usage: $0 start|restart|crash|resume|stop DIR" >&2
   exit 2
   ;;
 esac

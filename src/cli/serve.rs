@@ -17,7 +17,7 @@ use crate::registry::{
     cache::{BundleCache, DEFAULT_CACHE_BYTES},
 };
 use crate::runner::Limits;
-use crate::storage::Storage;
+use crate::storage::{Backend, CONNECT_PATIENCE, Storage};
 use crate::worker::{self, Shutdown, WorkerConfig};
 
 /// The project's own mazes, loaded as the default public set on first start.
@@ -176,15 +176,19 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("cannot open the database {}", args.database))?,
     );
-    let requeued = storage.requeue_expired().await?;
-    if requeued > 0 {
+    // PostgreSQL may restart while the server starts: the start-up work (all of it safe
+    // to do twice) is tried again for as long as the connection itself would be.
+    let since = std::time::Instant::now();
+    while let Err(e) = prepare(&storage, &data_dir).await {
+        if storage.backend() != Backend::Postgres || since.elapsed() >= CONNECT_PATIENCE {
+            return Err(e);
+        }
         tracing::warn!(
-            count = requeued,
-            "re-queued matches left running by an earlier server"
+            cause = format!("{e:#}"),
+            "PostgreSQL is not ready yet; trying again"
         );
+        tokio::time::sleep(Duration::from_secs(1)).await;
     }
-    load_default_mazes(&storage).await?;
-    registry::migrate::migrate_data_folder(&storage, &data_dir).await?;
 
     let admin_token = match args.admin_token.filter(|t| !t.trim().is_empty()) {
         Some(t) => t,
@@ -294,6 +298,22 @@ pub(super) async fn finish(
 
 /// Stores the shipped mazes as public mazes when the database has none (servers that
 /// start together on one database may both try: a maze already stored is skipped).
+/// The server's start-up work on the database: re-queue what an earlier server left
+/// running, load the default mazes into an empty database, move an earlier release's
+/// data folder in.
+async fn prepare(storage: &Storage, data_dir: &std::path::Path) -> anyhow::Result<()> {
+    let requeued = storage.requeue_expired().await?;
+    if requeued > 0 {
+        tracing::warn!(
+            count = requeued,
+            "re-queued matches left running by an earlier server"
+        );
+    }
+    load_default_mazes(storage).await?;
+    registry::migrate::migrate_data_folder(storage, data_dir).await?;
+    Ok(())
+}
+
 async fn load_default_mazes(storage: &Storage) -> anyhow::Result<()> {
     if storage.count_mazes().await? > 0 {
         return Ok(());

@@ -128,7 +128,7 @@ impl Storage {
                 "the database URL must start with sqlite:// or postgres://".into(),
             ))
         })?;
-        let storage = match backend {
+        match backend {
             Backend::Sqlite => {
                 // Made if missing, unless the URL says otherwise.
                 let url = if url.contains("mode=") {
@@ -151,47 +151,46 @@ impl Storage {
                     .connect_with(options)
                     .await?;
                 sqlx::migrate!("migrations/sqlite").run(&pool).await?;
-                Storage {
-                    pool,
-                    backend,
-                    writes: std::sync::Arc::default(),
-                    max_retries: retries::MAX_MATCH_RETRIES,
-                }
+                Storage::ready(pool, backend).await
             }
             Backend::Postgres => {
                 let options = AnyConnectOptions::from_str(url).map_err(bad_url)?;
-                // A server or worker may start while PostgreSQL does (or restarts): it
-                // waits for it a while rather than exit at once.
+                // A server or worker may start while PostgreSQL does (or restarts, even
+                // between the connection and the last start-up statement): it waits for
+                // it a while rather than exit at once.
                 let since = std::time::Instant::now();
-                let pool = loop {
-                    match AnyPoolOptions::new()
-                        .max_connections(16)
-                        .acquire_timeout(Duration::from_secs(30))
-                        .connect_with(options.clone())
-                        .await
-                    {
-                        Ok(pool) => match sqlx::migrate!("migrations/postgres").run(&pool).await {
-                            Ok(()) => break pool,
-                            Err(e) if since.elapsed() < CONNECT_PATIENCE => {
-                                tracing::warn!(cause = %e, "PostgreSQL did not take the migrations yet; trying again");
-                                tokio::time::sleep(Duration::from_secs(1)).await;
-                            }
-                            Err(e) => return Err(e.into()),
-                        },
+                loop {
+                    match Storage::open_postgres(&options).await {
+                        Ok(storage) => return Ok(storage),
                         Err(e) if since.elapsed() < CONNECT_PATIENCE => {
-                            tracing::warn!(cause = %e, "PostgreSQL does not answer yet; trying again");
+                            tracing::warn!(cause = %e, "PostgreSQL is not ready yet; trying again");
                             tokio::time::sleep(Duration::from_secs(1)).await;
                         }
-                        Err(e) => return Err(e.into()),
+                        Err(e) => return Err(e),
                     }
-                };
-                Storage {
-                    pool,
-                    backend,
-                    writes: std::sync::Arc::default(),
-                    max_retries: retries::MAX_MATCH_RETRIES,
                 }
             }
+        }
+    }
+
+    /// One attempt at [`Storage::open`] on PostgreSQL: connect, migrate, convert.
+    async fn open_postgres(options: &AnyConnectOptions) -> Result<Storage> {
+        let pool = AnyPoolOptions::new()
+            .max_connections(16)
+            .acquire_timeout(Duration::from_secs(30))
+            .connect_with(options.clone())
+            .await?;
+        sqlx::migrate!("migrations/postgres").run(&pool).await?;
+        Storage::ready(pool, Backend::Postgres).await
+    }
+
+    /// The storage on a migrated `pool`, once records of earlier releases are converted.
+    async fn ready(pool: AnyPool, backend: Backend) -> Result<Storage> {
+        let storage = Storage {
+            pool,
+            backend,
+            writes: std::sync::Arc::default(),
+            max_retries: retries::MAX_MATCH_RETRIES,
         };
         storage.convert_inline_records().await?;
         Ok(storage)

@@ -2,7 +2,8 @@
 //! killed with SIGKILL and started again, ten times, ends with every match recorded
 //! exactly once and the same standings as the tournament played without faults:
 //! - on PostgreSQL, by one API server (`serve --jobs 0`) and three `mazearena worker`
-//!   processes, any of which may be killed; PostgreSQL itself is restarted once too;
+//!   processes, any of which may be killed; PostgreSQL itself crashes once too, and a
+//!   process starts while it is down;
 //! - on SQLite, by one server with its own workers.
 //!
 //! The fault-free standings come from `mazearena tournament` (local, SQLite) on the same
@@ -344,17 +345,20 @@ async fn play_under_fire(
             rng.below(n as u64) as usize
         };
         eprintln!("kill {}: {}", k + 1, procs[target].name);
-        procs[target].kill_and_restart();
-        if k == KILLS / 2
-            && let Some(dir) = restart_postgres
-        {
-            eprintln!("restarting PostgreSQL");
-            let status = Command::new(root().join(".ci/postgres.sh"))
-                .arg("restart")
-                .arg(dir)
-                .status()
-                .unwrap();
-            assert!(status.success());
+        match restart_postgres {
+            // Once, PostgreSQL crashes too, and the killed process starts while it is
+            // down: it must wait for it, not exit.
+            Some(dir) if k == KILLS / 2 => {
+                eprintln!(
+                    "PostgreSQL crashes; {} starts while it is down",
+                    procs[target].name
+                );
+                postgres_ctl(dir, "crash");
+                procs[target].kill_and_restart();
+                tokio::time::sleep(Duration::from_millis(1500)).await;
+                postgres_ctl(dir, "resume");
+            }
+            _ => procs[target].kill_and_restart(),
         }
         wait_healthy(client, base).await;
     }
@@ -369,6 +373,16 @@ async fn play_under_fire(
         tokio::time::sleep(Duration::from_millis(500)).await;
     }
     id
+}
+
+/// Runs `.ci/postgres.sh CMD DIR` on the test's cluster.
+fn postgres_ctl(dir: &Path, cmd: &str) {
+    let status = Command::new(root().join(".ci/postgres.sh"))
+        .arg(cmd)
+        .arg(dir)
+        .status()
+        .unwrap();
+    assert!(status.success(), "postgres.sh {cmd} failed");
 }
 
 fn args(list: &[&str]) -> Vec<String> {
