@@ -1,10 +1,9 @@
 //! Reading a bot's pipes safely: reply lines with a length cap, and a bounded stderr tail.
 
 use std::collections::VecDeque;
-use std::os::fd::AsFd;
 
 use tokio::io::{AsyncRead, AsyncReadExt};
-use tokio_util::codec::{AnyDelimiterCodec, FramedRead};
+use tokio_util::codec::{AnyDelimiterCodec, AnyDelimiterCodecError, FramedRead};
 
 use crate::protocol::MAX_LINE_BYTES;
 
@@ -21,107 +20,97 @@ pub const STDERR_STEP_LINES: usize = 50;
 /// A stderr line longer than this is cut (with "…") in the trace.
 pub const STDERR_LINE_BYTES: usize = 500;
 
-/// What the stderr reader does with each line besides keeping the tail.
+/// A bot's stderr, read by the match's own task while it waits for an answer: keeps
+/// the last `cap` bytes (with a note of how much was cut) and cuts the rest into lines
+/// (each cut to [`STDERR_LINE_BYTES`]) for the trace.
+///
+/// The stderr bytes a bot wrote before an answer are read before that answer: the
+/// runner's wait polls [`StderrReader::read_some`] first, and the kernel reports the
+/// stderr pipe ready no later than the stdout pipe written after it. So no step needs
+/// a system call of its own to find them.
 #[derive(Debug)]
-pub struct StderrLines {
-    /// Where lines go for the trace, until [`STDERR_TRACE_BYTES`] have been sent.
-    pub trace: tokio::sync::mpsc::UnboundedSender<String>,
-    /// Print each line on our own stderr as it comes (`mazearena run --verbose`).
-    pub echo: bool,
+pub struct StderrReader<R> {
+    stream: R,
+    open: bool,
+    tail: Tail,
+    splitter: LineSplitter,
+    buf: Box<[u8]>,
 }
 
-/// A request to the stderr reader: take in every stderr byte the bot has written so far,
-/// then answer. The runner sends one after each answer so that the lines a bot wrote
-/// before answering are handed on before the next step starts, however late the
-/// reader's task would otherwise run.
-pub type StderrSync = tokio::sync::oneshot::Sender<()>;
-
-/// Reads a bot's stderr to its end: keeps its last `cap` bytes (with a note of how much was cut)
-/// and hands each complete line, cut to [`STDERR_LINE_BYTES`], to `lines`. On each
-/// request from `syncs` it first reads whatever the pipe already holds (without
-/// waiting), so that the lines written before that moment have been handed on when it
-/// answers.
-pub async fn read_stderr<R: AsyncRead + AsFd + Unpin>(
-    mut stream: R,
-    cap: usize,
-    lines: StderrLines,
-    mut syncs: tokio::sync::mpsc::UnboundedReceiver<StderrSync>,
-) -> String {
-    let mut tail = Tail::new(cap);
-    let mut splitter = LineSplitter::new(lines);
-    let mut buf = vec![0u8; 8192];
-    let mut syncs_open = true;
-    loop {
-        tokio::select! {
-            biased;
-            request = syncs.recv(), if syncs_open => match request {
-                Some(answer) => {
-                    let eof = read_ready(&stream, &mut buf, |chunk| {
-                        tail.push(chunk);
-                        splitter.push(chunk);
-                    });
-                    let _ = answer.send(());
-                    if eof {
-                        break;
-                    }
-                }
-                None => syncs_open = false,
-            },
-            read = stream.read(&mut buf) => match read {
-                Ok(0) | Err(_) => break,
-                Ok(n) => {
-                    tail.push(&buf[..n]);
-                    splitter.push(&buf[..n]);
-                }
-            },
+impl<R: AsyncRead + Unpin> StderrReader<R> {
+    /// Reads `stream`, keeping its last `cap` bytes; with `echo`, each line is also
+    /// printed on our own stderr as it comes (`mazearena run --verbose`).
+    pub fn new(stream: R, cap: usize, echo: bool) -> Self {
+        StderrReader {
+            stream,
+            open: true,
+            tail: Tail::new(cap),
+            splitter: LineSplitter::new(echo),
+            buf: vec![0u8; 8192].into_boxed_slice(),
         }
     }
-    splitter.finish();
-    tail.into_text()
-}
 
-/// Whether `fd` holds bytes not yet read (or its end), right now.
-pub fn has_unread_bytes(fd: &impl AsFd) -> bool {
-    poll_readable(fd).unwrap_or(true)
-}
+    /// Whether the end of the stream is still to come.
+    pub fn is_open(&self) -> bool {
+        self.open
+    }
 
-/// Whether a read of `fd` would not wait now (bytes or the end); `None` if poll fails.
-fn poll_readable(fd: &impl AsFd) -> Option<bool> {
-    use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
-    let mut fds = [PollFd::new(fd.as_fd(), PollFlags::POLLIN)];
-    let n = poll(&mut fds, PollTimeout::ZERO).ok()?;
-    Some(
-        n > 0
-            && fds[0]
-                .revents()
-                .is_some_and(|r| r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP)),
-    )
-}
-
-/// Reads what `fd` holds right now, without waiting, passing each chunk to `each`.
-/// Returns whether the end of the stream was reached.
-fn read_ready(fd: &impl AsFd, buf: &mut [u8], mut each: impl FnMut(&[u8])) -> bool {
-    while poll_readable(fd) == Some(true) {
-        match nix::unistd::read(fd.as_fd(), buf) {
-            Ok(0) => return true,
-            Ok(n) => each(&buf[..n]),
-            Err(_) => return false,
+    /// Waits until the pipe holds bytes (or ends), then takes in one read of them.
+    /// Cancel safe: dropped before it completes, it has read nothing.
+    pub async fn read_some(&mut self) {
+        match self.stream.read(&mut self.buf).await {
+            Ok(0) | Err(_) => {
+                self.open = false;
+                self.splitter.finish();
+            }
+            Ok(n) => {
+                self.tail.push(&self.buf[..n]);
+                self.splitter.push(&self.buf[..n]);
+            }
         }
     }
-    false
+
+    /// The complete lines read since the last call (at most [`STDERR_TRACE_BYTES`] of
+    /// them over the whole stream).
+    pub fn take_lines(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.splitter.lines)
+    }
+
+    /// Reads the stream to its end, for at most `wait`; then the tail as text (noting
+    /// when the end was not reached) and the lines not yet taken.
+    pub async fn finish(mut self, wait: std::time::Duration) -> (String, Vec<String>) {
+        let to_end = async {
+            while self.open {
+                self.read_some().await;
+            }
+        };
+        let ended = tokio::time::timeout(wait, to_end).await.is_ok();
+        if !ended {
+            self.splitter.finish();
+        }
+        let mut tail = self.tail.into_text();
+        if !ended {
+            tail.push_str("\n[stderr could not be read to its end]");
+        }
+        (tail, self.splitter.lines)
+    }
 }
 
-/// Cuts a byte stream into lines for [`StderrLines`].
+/// Cuts a byte stream into lines for [`StderrReader`].
+#[derive(Debug)]
 struct LineSplitter {
-    lines: StderrLines,
+    /// Complete lines not yet taken.
+    lines: Vec<String>,
+    echo: bool,
     partial: Vec<u8>,
     sent: usize,
 }
 
 impl LineSplitter {
-    fn new(lines: StderrLines) -> Self {
+    fn new(echo: bool) -> Self {
         LineSplitter {
-            lines,
+            lines: Vec::new(),
+            echo,
             partial: Vec::new(),
             sent: 0,
         }
@@ -141,18 +130,51 @@ impl LineSplitter {
         let line = std::mem::take(&mut self.partial);
         let line = line.strip_suffix(b"\r").unwrap_or(&line);
         let text = crate::protocol::excerpt(line, STDERR_LINE_BYTES);
-        if self.lines.echo {
+        if self.echo {
             eprintln!("  bot stderr | {text}");
         }
         if self.sent < STDERR_TRACE_BYTES {
             self.sent += text.len() + 1;
-            let _ = self.lines.trace.send(text);
+            self.lines.push(text);
         }
     }
 
-    fn finish(mut self) {
+    /// Hands on a last line without its newline.
+    fn finish(&mut self) {
         if !self.partial.is_empty() {
             self.emit();
+        }
+    }
+}
+
+/// The most stderr reads in a row (8 KiB each) before a reply ready to be read is taken
+/// in anyway: a bot that writes stderr without end cannot hold its own answer back.
+const STDERR_READS_BEFORE_REPLY: u32 = 64;
+
+/// The bot's next reply line (`None` at the end of its stdout), once every stderr byte
+/// the bot wrote before it has been read into `stderr` (up to
+/// [`STDERR_READS_BEFORE_REPLY`] reads in a row). Cancel safe.
+pub async fn next_reply<O, E>(
+    replies: &mut ReplyReader<O>,
+    stderr: &mut StderrReader<E>,
+) -> Option<Result<tokio_util::bytes::Bytes, AnyDelimiterCodecError>>
+where
+    O: AsyncRead + Unpin,
+    E: AsyncRead + Unpin,
+{
+    use futures_util::{FutureExt, StreamExt};
+    let mut in_a_row = 0;
+    loop {
+        if in_a_row >= STDERR_READS_BEFORE_REPLY {
+            in_a_row = 0;
+            if let Some(line) = replies.next().now_or_never() {
+                return line;
+            }
+        }
+        tokio::select! {
+            biased;
+            () = stderr.read_some(), if stderr.is_open() => in_a_row += 1,
+            line = replies.next() => return line,
         }
     }
 }
@@ -170,6 +192,7 @@ pub fn reply_reader<R: AsyncRead>(stdout: R) -> ReplyReader<R> {
 }
 
 /// The last bytes of a stream, up to a cap, and how many came in all.
+#[derive(Debug)]
 struct Tail {
     cap: usize,
     kept: VecDeque<u8>,
@@ -268,63 +291,100 @@ mod tests {
         assert!(r.next().await.unwrap().is_err());
     }
 
-    fn lines_channel() -> (StderrLines, tokio::sync::mpsc::UnboundedReceiver<String>) {
-        let (tx, rx) = tokio::sync::mpsc::unbounded_channel();
-        let lines = StderrLines {
-            trace: tx,
-            echo: false,
-        };
-        (lines, rx)
-    }
-
-    fn received(rx: &mut tokio::sync::mpsc::UnboundedReceiver<String>) -> Vec<String> {
-        let mut got = Vec::new();
-        while let Ok(l) = rx.try_recv() {
-            got.push(l);
-        }
-        got
-    }
-
     #[tokio::test]
     async fn stderr_lines_are_handed_on_one_by_one_and_cut() {
         let (mut tx, rx) = tokio::net::unix::pipe::pipe().unwrap();
-        let (lines, mut got) = lines_channel();
-        let (_syncs, sync_rx) = tokio::sync::mpsc::unbounded_channel();
         let long = "y".repeat(STDERR_LINE_BYTES + 100);
         let data = format!("one\r\ntwo\n{long}\nlast without newline");
         tokio::io::AsyncWriteExt::write_all(&mut tx, data.as_bytes())
             .await
             .unwrap();
         drop(tx);
-        let tail = read_stderr(rx, 1000, lines, sync_rx).await;
+        let reader = StderrReader::new(rx, 1000, false);
+        let (tail, got) = reader.finish(std::time::Duration::from_secs(10)).await;
         assert!(tail.ends_with("last without newline"));
-        let got = received(&mut got);
         assert_eq!(got[..2], ["one", "two"]);
         assert!(got[2].ends_with('…') && got[2].len() < STDERR_LINE_BYTES + 10);
         assert_eq!(got[3], "last without newline");
+        assert_eq!(got.len(), 4);
     }
 
     #[tokio::test]
-    async fn a_sync_hands_on_every_line_already_written() {
-        // The reader task is never polled between the write and the sync request on this
-        // single-threaded runtime: only the sync's own read can find the lines.
+    async fn a_stderr_left_open_ends_the_tail_with_a_note() {
         let (tx, rx) = tokio::net::unix::pipe::pipe().unwrap();
-        let (lines, mut got) = lines_channel();
-        let (syncs, sync_rx) = tokio::sync::mpsc::unbounded_channel();
-        let reader = tokio::spawn(read_stderr(rx, 1000, lines, sync_rx));
-        for step in 1..=50 {
-            let text = format!("step {step}\n");
-            assert_eq!(
-                nix::unistd::write(&tx, text.as_bytes()).unwrap(),
-                text.len()
-            );
-            let (answer, done) = tokio::sync::oneshot::channel();
-            syncs.send(answer).unwrap();
-            done.await.unwrap();
-            assert_eq!(received(&mut got), [format!("step {step}")]);
-        }
+        nix::unistd::write(&tx, b"half a line").unwrap();
+        let reader = StderrReader::new(rx, 1000, false);
+        let (tail, got) = reader.finish(std::time::Duration::from_millis(100)).await;
+        assert_eq!(tail, "half a line\n[stderr could not be read to its end]");
+        assert_eq!(got, ["half a line"]);
         drop(tx);
-        assert!(reader.await.unwrap().ends_with("step 50\n"));
+    }
+
+    /// Two pipes standing for a bot's stdout and stderr.
+    fn bot_pipes() -> (
+        tokio::net::unix::pipe::Sender,
+        ReplyReader<tokio::net::unix::pipe::Receiver>,
+        tokio::net::unix::pipe::Sender,
+        StderrReader<tokio::net::unix::pipe::Receiver>,
+    ) {
+        let (out_tx, out_rx) = tokio::net::unix::pipe::pipe().unwrap();
+        let (err_tx, err_rx) = tokio::net::unix::pipe::pipe().unwrap();
+        (
+            out_tx,
+            reply_reader(out_rx),
+            err_tx,
+            StderrReader::new(err_rx, 1_000_000, false),
+        )
+    }
+
+    #[tokio::test]
+    async fn stderr_written_before_an_answer_is_read_before_it() {
+        // Both writes are done before the reader looks: the answer is ready at once, and
+        // only the order of the kernel's readiness reports can put the stderr first.
+        let (out, mut replies, err, mut stderr) = bot_pipes();
+        for step in 1..=200 {
+            for line in 0..step % 3 {
+                let text = format!("step {step} line {line}\n");
+                assert_eq!(
+                    nix::unistd::write(&err, text.as_bytes()).unwrap(),
+                    text.len()
+                );
+            }
+            let answer = format!("answer {step}\n");
+            nix::unistd::write(&out, answer.as_bytes()).unwrap();
+            let got = next_reply(&mut replies, &mut stderr)
+                .await
+                .unwrap()
+                .unwrap();
+            assert_eq!(&got[..], format!("answer {step}").as_bytes());
+            let want: Vec<String> = (0..step % 3)
+                .map(|l| format!("step {step} line {l}"))
+                .collect();
+            assert_eq!(stderr.take_lines(), want, "step {step}");
+        }
+    }
+
+    #[tokio::test]
+    async fn a_bot_that_writes_stderr_without_end_still_has_its_answer_read() {
+        // 1 MiB of stderr waits before the answer, more than the reads allowed in a row
+        // take in: the answer is read after those reads, the rest of the stderr later.
+        let (out, mut replies, err, mut stderr) = bot_pipes();
+        let mib: usize = 1 << 20;
+        nix::fcntl::fcntl(&err, nix::fcntl::FcntlArg::F_SETPIPE_SZ(mib as i32)).unwrap();
+        let chunk = vec![b'x'; 4096];
+        for _ in 0..mib / chunk.len() {
+            assert_eq!(nix::unistd::write(&err, &chunk).unwrap(), chunk.len());
+        }
+        nix::unistd::write(&out, b"answer\n").unwrap();
+        let got = next_reply(&mut replies, &mut stderr)
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(&got[..], b"answer");
+        let read = STDERR_READS_BEFORE_REPLY as u64 * stderr.buf.len() as u64;
+        assert!(read < mib as u64);
+        assert_eq!(stderr.tail.total, read);
+        drop((out, err));
     }
 
     #[test]

@@ -175,7 +175,7 @@ pub async fn run_match(
             break;
         };
         if !record.trace.is_empty() {
-            stderr_to_last_step(&mut record, session.take_stderr_lines().await);
+            stderr_to_last_step(&mut record, session.take_stderr_lines());
         }
         match session.exchange(&sense).await {
             Verdict::Answer {

@@ -4,7 +4,6 @@
 
 use std::time::{Duration, Instant};
 
-use futures_util::StreamExt;
 use tokio::io::AsyncWriteExt;
 use tokio::process::ChildStdin;
 use tokio::time::timeout_at;
@@ -20,9 +19,6 @@ use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
 
 /// How often the whole-match limits are looked at while the bot thinks.
 const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
-
-/// The longest the runner waits for the stderr reader to take in what the pipe holds.
-const STDERR_SYNC_WAIT: Duration = Duration::from_millis(500);
 
 /// Added to a timeout at step 1: the usual cause is an answer left in an output buffer.
 pub const STARTUP_HINT: &str = " (if the bot did print an answer, it may still sit in its output buffer: \
@@ -65,11 +61,7 @@ pub struct Session {
     process: BotProcess,
     stdin: ChildStdin,
     replies: framing::ReplyReader<tokio::process::ChildStdout>,
-    stderr: tokio::task::JoinHandle<String>,
-    stderr_lines: tokio::sync::mpsc::UnboundedReceiver<String>,
-    stderr_syncs: tokio::sync::mpsc::UnboundedSender<framing::StderrSync>,
-    /// The stderr pipe, to look whether it holds unread bytes before asking the reader.
-    stderr_pipe: Option<std::os::fd::OwnedFd>,
+    stderr: framing::StderrReader<tokio::process::ChildStderr>,
     started: Instant,
     limits: Limits,
     cpu_mark: Option<u64>,
@@ -110,25 +102,10 @@ impl Session {
             .stderr
             .take()
             .expect("stderr is piped by process::spawn");
-        let stderr_pipe = std::os::fd::AsFd::as_fd(&stderr).try_clone_to_owned().ok();
         let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-        let (lines, stderr_lines) = tokio::sync::mpsc::unbounded_channel();
-        let (stderr_syncs, syncs) = tokio::sync::mpsc::unbounded_channel();
-        let lines = framing::StderrLines {
-            trace: lines,
-            echo: echo_stderr,
-        };
         Ok(Session {
-            stderr: tokio::spawn(framing::read_stderr(
-                stderr,
-                framing::STDERR_TAIL_BYTES,
-                lines,
-                syncs,
-            )),
-            stderr_lines,
-            stderr_syncs,
-            stderr_pipe,
+            stderr: framing::StderrReader::new(stderr, framing::STDERR_TAIL_BYTES, echo_stderr),
             replies: framing::reply_reader(stdout),
             stdin,
             started,
@@ -144,26 +121,12 @@ impl Session {
         self.process.pid
     }
 
-    /// The bot's stderr lines written since the last call (bounded in total by
-    /// [`framing::STDERR_TRACE_BYTES`]): the stderr reader first takes in all that the
-    /// pipe holds, so a line written before an answer is never handed on after it.
-    pub async fn take_stderr_lines(&mut self) -> Vec<String> {
-        // Matches run on a single-threaded runtime: when the pipe holds nothing, every
-        // byte read so far has been handed on, and asking the reader is not needed.
-        let unread = self
-            .stderr_pipe
-            .as_ref()
-            .is_none_or(framing::has_unread_bytes);
-        let (answer, done) = tokio::sync::oneshot::channel();
-        if unread && self.stderr_syncs.send(answer).is_ok() {
-            // The reader answers at once unless its task is starved; never wait long.
-            let _ = tokio::time::timeout(STDERR_SYNC_WAIT, done).await;
-        }
-        let mut lines = Vec::new();
-        while let Ok(line) = self.stderr_lines.try_recv() {
-            lines.push(line);
-        }
-        lines
+    /// The bot's stderr lines read since the last call (bounded in total by
+    /// [`framing::STDERR_TRACE_BYTES`]). Stderr is read while the bot is waited for,
+    /// each answer only after the stderr written before it, so a line written before
+    /// an answer is never handed on after it.
+    pub fn take_stderr_lines(&mut self) -> Vec<String> {
+        self.stderr.take_lines()
     }
 
     /// Sends `message` within the startup limit (the start message).
@@ -193,10 +156,11 @@ impl Session {
             return self.limit_or(Verdict::Fault(status, failure), sense.step);
         }
         let next = loop {
+            let reply = framing::next_reply(&mut self.replies, &mut self.stderr);
             let read = async {
                 match deadline {
-                    Some(d) => timeout_at(d, self.replies.next()).await,
-                    None => Ok(self.replies.next().await),
+                    Some(d) => timeout_at(d, reply).await,
+                    None => Ok(reply.await),
                 }
             };
             tokio::select! {
@@ -290,10 +254,19 @@ impl Session {
         let cpu_before = self.process.cpu_us();
         let _ = send(&mut self.stdin, end, Some(grace)).await;
         drop(self.stdin);
-        let status = timeout_at(grace, self.process.child.wait())
-            .await
-            .ok()
-            .and_then(Result::ok);
+        // Its stderr is read meanwhile: a bot blocked on a full pipe could not exit.
+        let stderr = &mut self.stderr;
+        let child = &mut self.process.child;
+        let exited = async {
+            loop {
+                tokio::select! {
+                    biased;
+                    () = stderr.read_some(), if stderr.is_open() => {}
+                    status = child.wait() => break status,
+                }
+            }
+        };
+        let status = timeout_at(grace, exited).await.ok().and_then(Result::ok);
         let cpu_us = match (cpu_before, self.process.cpu_us()) {
             (Some(a), Some(b)) => Some(a.max(b)),
             (a, b) => a.or(b),
@@ -304,14 +277,7 @@ impl Session {
             Some(s) => Some(s),
             None => self.process.child.wait().await.ok(),
         };
-        let stderr_tail = match tokio::time::timeout(EXIT_GRACE, self.stderr).await {
-            Ok(Ok(tail)) => tail,
-            _ => String::from("[stderr could not be read to its end]"),
-        };
-        let mut late_stderr = Vec::new();
-        while let Ok(line) = self.stderr_lines.try_recv() {
-            late_stderr.push(line);
-        }
+        let (stderr_tail, late_stderr) = self.stderr.finish(EXIT_GRACE).await;
         Ended {
             exit,
             stderr_tail,
