@@ -122,6 +122,7 @@ pub async fn build_logged(
                     root.create(super::sandbox::cgroup::CgroupLimits {
                         memory_bytes: Some(BUILD_MEMORY_BYTES),
                         pids: Some(BUILD_PROCESS_LIMIT),
+                        core: None,
                     })
                     .map_err(spawn_err)?,
                 );

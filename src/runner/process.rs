@@ -128,6 +128,8 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                     root.create(CgroupLimits {
                         memory_bytes: launch.memory_limit_bytes,
                         pids: launch.process_limit.map(|n| n + BWRAP_PROCESSES),
+                        // Started from the match's thread: its core is the match's.
+                        core: super::affinity::pinned_core(),
                     })
                     .map_err(|e| LaunchError::Sandbox(e.to_string()))?,
                 ),

@@ -191,6 +191,25 @@ fn spinning_children_are_counted_in_the_cpu_time_and_die_with_the_match() {
 }
 
 #[test]
+fn a_bot_cannot_leave_the_core_of_its_match() {
+    let Some(_) = full_sandbox("hostile core") else {
+        return;
+    };
+    let r = attack("leave_core.py", &[], &[]);
+    assert_eq!(r["status"], "step_limit", "{r}");
+    contained(&r, 2);
+    let core = r["core"]
+        .as_u64()
+        .expect("the match ran on a core of its own");
+    assert!(
+        stderr(&r).contains(&format!("BLOCKED cores={core}\n"))
+            && stderr(&r).contains(&format!("BLOCKED child cores={core}\n")),
+        "core {core}: {}",
+        stderr(&r)
+    );
+}
+
+#[test]
 fn filling_the_scratch_area_ends_at_the_scratch_limit_and_leaves_nothing() {
     let Some(_) = full_sandbox("hostile scratch") else {
         return;

@@ -1,7 +1,14 @@
 //! Whole-match limits with control groups (v1 or v2): one cgroup per match that holds
 //! every process of the bot, with a memory limit (resident, all processes together), a
-//! process/thread limit, a CPU quota of one core (so a bot's helpers cannot slow another
-//! match) and a CPU-time counter. The bot's outer process (`mazearena sandbox-enter`) joins it
+//! process/thread limit, one core of CPU (so a bot's helpers cannot slow another match)
+//! and a CPU-time counter.
+//!
+//! One core is the match's own core where the match has one and the cpuset controller is
+//! there (the bot's processes cannot run anywhere else, whatever affinity they ask
+//! for), else a CPU quota of one core. The cpuset costs nothing per step, while a cpu
+//! controller group puts the bot in a scheduling group of its own, and each switch
+//! between the referee and the bot then crosses groups: about 0.7 µs more per exchange
+//! on the project's machine (BENCHMARKS.md). The bot's outer process (`mazearena sandbox-enter`) joins it
 //! before it `exec`s bubblewrap, so no process of the bot is ever outside it.
 //!
 //! Match cgroups are made under this server's own cgroup (read from `/proc/self/cgroup`),
@@ -27,6 +34,8 @@ pub enum CgroupRoot {
         cpuacct: PathBuf,
         /// The cpu controller's folder (the quota), when mounted.
         cpu: Option<PathBuf>,
+        /// The cpuset controller's folder (the match's core), when mounted and usable.
+        cpuset: Option<PathBuf>,
     },
     /// The unified hierarchy: one folder with memory, pids and cpu enabled below it.
     V2 {
@@ -42,6 +51,9 @@ pub struct CgroupLimits {
     pub memory_bytes: Option<u64>,
     /// Processes and threads at once.
     pub pids: Option<u64>,
+    /// The one core every process may run on (the match's), held by a cpuset where
+    /// there is one; without it (or without a cpuset) a CPU quota of one core.
+    pub core: Option<usize>,
 }
 
 /// A limit that a match cgroup saw being hit.
@@ -67,18 +79,28 @@ impl CgroupRoot {
         let mounts = std::fs::read_to_string("/proc/self/mountinfo")
             .map_err(|e| format!("/proc/self/mountinfo: {e}"))?;
         let v1 = detect_v1(&own, &mounts);
-        let root = match v1 {
+        let mut root = match v1 {
             Ok(root) => root,
             Err(v1_err) => detect_v2(&own, &mounts)
                 .map_err(|v2_err| format!("cgroup v1: {v1_err}; cgroup v2: {v2_err}"))?,
         };
-        let probe = root
-            .create(CgroupLimits {
+        let probe = |root: &CgroupRoot| {
+            root.create(CgroupLimits {
                 memory_bytes: Some(64 << 20),
                 pids: Some(8),
+                core: super::super::affinity::allowed_cores().first().copied(),
             })
-            .map_err(|e| format!("cannot make a match cgroup: {e}"))?;
-        drop(probe);
+            .map(drop)
+            .map_err(|e| format!("cannot make a match cgroup: {e}"))
+        };
+        if let Err(e) = probe(&root) {
+            // A cpuset that cannot be set up leaves the CPU quota to hold the core.
+            match &mut root {
+                CgroupRoot::V1 { cpuset, .. } if cpuset.is_some() => *cpuset = None,
+                _ => return Err(e),
+            }
+            probe(&root)?;
+        }
         root.sweep_stale();
         Ok(root)
     }
@@ -91,11 +113,18 @@ impl CgroupRoot {
                 pids,
                 cpuacct,
                 cpu,
-            } => [Some(memory), Some(pids), Some(cpuacct), cpu.as_ref()]
-                .into_iter()
-                .flatten()
-                .map(PathBuf::as_path)
-                .collect(),
+                cpuset,
+            } => [
+                Some(memory),
+                Some(pids),
+                Some(cpuacct),
+                cpu.as_ref(),
+                cpuset.as_ref(),
+            ]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect(),
             CgroupRoot::V2 { base } => vec![base.as_path()],
         }
     }
@@ -121,6 +150,21 @@ impl CgroupRoot {
                     remove_stale(&entry.path());
                 }
             }
+        }
+    }
+
+    /// How a match is held to one core, for reports.
+    pub fn cpu_limit(&self) -> &'static str {
+        match self {
+            CgroupRoot::V1 {
+                cpuset: Some(_), ..
+            } => "a cpuset of the match's core",
+            CgroupRoot::V1 { cpu: None, .. } => "no CPU limit (no cpu or cpuset controller)",
+            CgroupRoot::V1 { .. } => "a one-core CPU quota",
+            CgroupRoot::V2 { base } if base.join("cpuset.cpus").exists() => {
+                "a cpuset of the match's core"
+            }
+            CgroupRoot::V2 { .. } => "a one-core CPU quota",
         }
     }
 
@@ -156,6 +200,7 @@ impl CgroupRoot {
                 pids,
                 cpuacct,
                 cpu,
+                cpuset,
             } => {
                 group.memory = group.make(&memory.join(&name))?;
                 group.pids = group.make(&pids.join(&name))?;
@@ -172,7 +217,17 @@ impl CgroupRoot {
                 if let Some(n) = limits.pids {
                     write(&group.pids, "pids.max", n)?;
                 }
-                if let Some(cpu) = cpu {
+                let pinned = match (limits.core, cpuset) {
+                    (Some(core), Some(cpuset)) => {
+                        let dir = group.make(&cpuset.join(&name))?;
+                        // A v1 cpuset takes no process before it has memory nodes.
+                        copy_file(cpuset, &dir, "cpuset.mems")?;
+                        write(&dir, "cpuset.cpus", core as u64)?;
+                        true
+                    }
+                    _ => false,
+                };
+                if let Some(cpu) = cpu.as_ref().filter(|_| !pinned) {
                     if cpu != cpuacct {
                         let dir = group.make(&cpu.join(&name))?;
                         write(&dir, "cpu.cfs_period_us", CPU_PERIOD_US)?;
@@ -192,10 +247,16 @@ impl CgroupRoot {
                 if let Some(n) = limits.pids {
                     write(&dir, "pids.max", n)?;
                 }
-                let _ = std::fs::write(
-                    dir.join("cpu.max"),
-                    format!("{CPU_PERIOD_US} {CPU_PERIOD_US}"),
-                );
+                let pinned = limits.core.is_some_and(|core| {
+                    dir.join("cpuset.cpus").exists()
+                        && std::fs::write(dir.join("cpuset.cpus"), core.to_string()).is_ok()
+                });
+                if !pinned {
+                    let _ = std::fs::write(
+                        dir.join("cpu.max"),
+                        format!("{CPU_PERIOD_US} {CPU_PERIOD_US}"),
+                    );
+                }
                 group.memory = dir.clone();
                 group.pids = dir.clone();
                 group.cpu_usage = dir.join("cpu.stat");
@@ -222,6 +283,13 @@ fn remove_stale(dir: &Path) {
         }
         std::thread::sleep(Duration::from_millis(10));
     }
+}
+
+/// Copies the value of `file` in folder `from` to the same file in `to`.
+fn copy_file(from: &Path, to: &Path, file: &str) -> std::io::Result<()> {
+    let value = std::fs::read_to_string(from.join(file))?;
+    std::fs::write(to.join(file), value.trim())
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", to.join(file).display())))
 }
 
 fn write(dir: &Path, file: &str, value: u64) -> std::io::Result<()> {
@@ -419,7 +487,22 @@ fn detect_v1(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
         pids: folder("pids")?,
         cpuacct: folder("cpuacct")?,
         cpu: folder("cpu").ok(),
+        cpuset: folder("cpuset")
+            .ok()
+            .filter(|dir| inherit_cpuset(dir).is_ok()),
     })
+}
+
+/// Gives a new v1 cpuset folder its parent's cores and memory nodes (it starts with
+/// none, and its children could have none).
+fn inherit_cpuset(dir: &Path) -> std::io::Result<()> {
+    let parent = dir.parent().unwrap_or(dir);
+    for file in ["cpuset.cpus", "cpuset.mems"] {
+        if std::fs::read_to_string(dir.join(file))?.trim().is_empty() {
+            copy_file(parent, dir, file)?;
+        }
+    }
+    Ok(())
 }
 
 fn detect_v2(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
@@ -440,8 +523,10 @@ fn detect_v2(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
         }
     }
     let enable = |dir: &Path| {
-        std::fs::write(dir.join("cgroup.subtree_control"), "+memory +pids +cpu")
-            .or_else(|_| std::fs::write(dir.join("cgroup.subtree_control"), "+memory +pids"))
+        let control = dir.join("cgroup.subtree_control");
+        std::fs::write(&control, "+memory +pids +cpu +cpuset")
+            .or_else(|_| std::fs::write(&control, "+memory +pids +cpu"))
+            .or_else(|_| std::fs::write(&control, "+memory +pids"))
     };
     if enable(&here).is_err() {
         // "No internal processes": move this server into a leaf of its own first.

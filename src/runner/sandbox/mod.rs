@@ -289,10 +289,13 @@ impl Sandbox {
             cg.is_ok(),
             match &cg {
                 Ok(r) => format!(
-                    "{}: memory, processes and a one-core CPU quota per match, CPU time of every process",
-                    r.version()
+                    "{}: memory, processes and one core per match ({}), CPU time of every process",
+                    r.version(),
+                    r.cpu_limit()
                 ),
-                Err(e) => format!("{e} (limits fall back to a watchdog over the process tree; no CPU quota)"),
+                Err(e) => format!(
+                    "{e} (limits fall back to a watchdog over the process tree; no CPU limit)"
+                ),
             },
         ));
         if let Ok(Sandbox::Full(f)) = &result {
