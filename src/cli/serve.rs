@@ -17,7 +17,7 @@ use crate::registry::{
     cache::{BundleCache, DEFAULT_CACHE_BYTES},
 };
 use crate::runner::Limits;
-use crate::storage::{Backend, CONNECT_PATIENCE, Storage};
+use crate::storage::{Backend, Storage, with_patience};
 use crate::worker::{self, Shutdown, WorkerConfig};
 
 /// The project's own mazes, loaded as the default public set on first start.
@@ -178,16 +178,9 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     );
     // PostgreSQL may restart while the server starts: the start-up work (all of it safe
     // to do twice) is tried again for as long as the connection itself would be.
-    let since = std::time::Instant::now();
-    while let Err(e) = prepare(&storage, &data_dir).await {
-        if storage.backend() != Backend::Postgres || since.elapsed() >= CONNECT_PATIENCE {
-            return Err(e);
-        }
-        tracing::warn!(
-            cause = format!("{e:#}"),
-            "PostgreSQL is not ready yet; trying again"
-        );
-        tokio::time::sleep(Duration::from_secs(1)).await;
+    match storage.backend() {
+        Backend::Postgres => with_patience(|| prepare(&storage, &data_dir)).await?,
+        Backend::Sqlite => prepare(&storage, &data_dir).await?,
     }
 
     let admin_token = match args.admin_token.filter(|t| !t.trim().is_empty()) {

@@ -50,11 +50,6 @@ impl<R: AsyncRead + Unpin> StderrReader<R> {
         }
     }
 
-    /// Whether the end of the stream is still to come.
-    pub fn is_open(&self) -> bool {
-        self.open
-    }
-
     /// Waits until the pipe holds bytes (or ends), then takes in one read of them.
     /// Cancel safe: dropped before it completes, it has read nothing.
     pub async fn read_some(&mut self) {
@@ -66,6 +61,28 @@ impl<R: AsyncRead + Unpin> StderrReader<R> {
             Ok(n) => {
                 self.tail.push(&self.buf[..n]);
                 self.splitter.push(&self.buf[..n]);
+            }
+        }
+    }
+
+    /// Waits for `event` while reading the stderr, taking in every stderr byte the
+    /// pipe holds before `event` is looked at (up to [`STDERR_READS_BEFORE_REPLY`]
+    /// reads in a row). Cancel safe when `event` is.
+    pub async fn drain_while<F: std::future::Future>(&mut self, event: F) -> F::Output {
+        use futures_util::FutureExt;
+        tokio::pin!(event);
+        let mut in_a_row = 0;
+        loop {
+            if in_a_row >= STDERR_READS_BEFORE_REPLY {
+                in_a_row = 0;
+                if let Some(out) = event.as_mut().now_or_never() {
+                    return out;
+                }
+            }
+            tokio::select! {
+                biased;
+                () = self.read_some(), if self.open => in_a_row += 1,
+                out = event.as_mut() => return out,
             }
         }
     }
@@ -147,13 +164,14 @@ impl LineSplitter {
     }
 }
 
-/// The most stderr reads in a row (8 KiB each) before a reply ready to be read is taken
-/// in anyway: a bot that writes stderr without end cannot hold its own answer back.
+/// The most stderr reads in a row (8 KiB each) before an awaited event that is ready
+/// (a reply, the bot's exit) is taken in anyway: a bot that writes stderr without end
+/// cannot hold its own answer back.
 const STDERR_READS_BEFORE_REPLY: u32 = 64;
 
 /// The bot's next reply line (`None` at the end of its stdout), once every stderr byte
-/// the bot wrote before it has been read into `stderr` (up to
-/// [`STDERR_READS_BEFORE_REPLY`] reads in a row). Cancel safe.
+/// the bot wrote before it has been read into `stderr` (see
+/// [`StderrReader::drain_while`]). Cancel safe.
 pub async fn next_reply<O, E>(
     replies: &mut ReplyReader<O>,
     stderr: &mut StderrReader<E>,
@@ -162,21 +180,8 @@ where
     O: AsyncRead + Unpin,
     E: AsyncRead + Unpin,
 {
-    use futures_util::{FutureExt, StreamExt};
-    let mut in_a_row = 0;
-    loop {
-        if in_a_row >= STDERR_READS_BEFORE_REPLY {
-            in_a_row = 0;
-            if let Some(line) = replies.next().now_or_never() {
-                return line;
-            }
-        }
-        tokio::select! {
-            biased;
-            () = stderr.read_some(), if stderr.is_open() => in_a_row += 1,
-            line = replies.next() => return line,
-        }
-    }
+    use futures_util::StreamExt;
+    stderr.drain_while(replies.next()).await
 }
 
 /// A line reader over the bot's stdout that never buffers more than one capped line.

@@ -255,17 +255,7 @@ impl Session {
         let _ = send(&mut self.stdin, end, Some(grace)).await;
         drop(self.stdin);
         // Its stderr is read meanwhile: a bot blocked on a full pipe could not exit.
-        let stderr = &mut self.stderr;
-        let child = &mut self.process.child;
-        let exited = async {
-            loop {
-                tokio::select! {
-                    biased;
-                    () = stderr.read_some(), if stderr.is_open() => {}
-                    status = child.wait() => break status,
-                }
-            }
-        };
+        let exited = self.stderr.drain_while(self.process.child.wait());
         let status = timeout_at(grace, exited).await.ok().and_then(Result::ok);
         let cpu_us = match (cpu_before, self.process.cpu_us()) {
             (Some(a), Some(b)) => Some(a.max(b)),

@@ -30,6 +30,32 @@ use sqlx::{AnyPool, Executor};
 /// How long a process that starts waits for PostgreSQL to answer before it gives up.
 pub const CONNECT_PATIENCE: Duration = Duration::from_secs(30);
 
+/// Tries `attempt` again, a second apart, until it succeeds or [`CONNECT_PATIENCE`]
+/// has passed since the first try: start-up work on PostgreSQL, which may be starting
+/// or restarting, waits for it a while rather than exit at once.
+///
+/// # Errors
+/// The last attempt's.
+pub async fn with_patience<T, E, F>(mut attempt: impl FnMut() -> F) -> Result<T, E>
+where
+    E: std::fmt::Display,
+    F: std::future::Future<Output = Result<T, E>>,
+{
+    let since = std::time::Instant::now();
+    loop {
+        match attempt().await {
+            Err(e) if since.elapsed() < CONNECT_PATIENCE => {
+                tracing::warn!(
+                    cause = format!("{e:#}"),
+                    "PostgreSQL is not ready yet; trying again"
+                );
+                tokio::time::sleep(Duration::from_secs(1)).await;
+            }
+            done => return done,
+        }
+    }
+}
+
 /// How long a statement waits for another connection's write lock before failing.
 pub const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
 
@@ -156,19 +182,8 @@ impl Storage {
             Backend::Postgres => {
                 let options = AnyConnectOptions::from_str(url).map_err(bad_url)?;
                 // A server or worker may start while PostgreSQL does (or restarts, even
-                // between the connection and the last start-up statement): it waits for
-                // it a while rather than exit at once.
-                let since = std::time::Instant::now();
-                loop {
-                    match Storage::open_postgres(&options).await {
-                        Ok(storage) => return Ok(storage),
-                        Err(e) if since.elapsed() < CONNECT_PATIENCE => {
-                            tracing::warn!(cause = %e, "PostgreSQL is not ready yet; trying again");
-                            tokio::time::sleep(Duration::from_secs(1)).await;
-                        }
-                        Err(e) => return Err(e),
-                    }
-                }
+                // between the connection and the last start-up statement).
+                with_patience(|| Storage::open_postgres(&options)).await
             }
         }
     }

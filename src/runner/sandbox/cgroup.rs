@@ -8,8 +8,10 @@
 //! for), else a CPU quota of one core. The cpuset costs nothing per step, while a cpu
 //! controller group puts the bot in a scheduling group of its own, and each switch
 //! between the referee and the bot then crosses groups: about 0.7 µs more per exchange
-//! on the project's machine (BENCHMARKS.md). The bot's outer process (`mazearena sandbox-enter`) joins it
-//! before it `exec`s bubblewrap, so no process of the bot is ever outside it.
+//! on the project's machine (BENCHMARKS.md).
+//!
+//! The bot's outer process (`mazearena sandbox-enter`) joins the cgroup before it
+//! `exec`s bubblewrap, so no process of the bot is ever outside it.
 //!
 //! Match cgroups are made under this server's own cgroup (read from `/proc/self/cgroup`),
 //! in a folder `mazearena`, so an operator's limits on the server also bound its bots.
@@ -247,10 +249,10 @@ impl CgroupRoot {
                 if let Some(n) = limits.pids {
                     write(&dir, "pids.max", n)?;
                 }
-                let pinned = limits.core.is_some_and(|core| {
-                    dir.join("cpuset.cpus").exists()
-                        && std::fs::write(dir.join("cpuset.cpus"), core.to_string()).is_ok()
-                });
+                // Without the cpuset controller the file is missing and the write fails.
+                let pinned = limits
+                    .core
+                    .is_some_and(|core| write(&dir, "cpuset.cpus", core as u64).is_ok());
                 if !pinned {
                     let _ = std::fs::write(
                         dir.join("cpu.max"),
@@ -288,12 +290,16 @@ fn remove_stale(dir: &Path) {
 /// Copies the value of `file` in folder `from` to the same file in `to`.
 fn copy_file(from: &Path, to: &Path, file: &str) -> std::io::Result<()> {
     let value = std::fs::read_to_string(from.join(file))?;
-    std::fs::write(to.join(file), value.trim())
-        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", to.join(file).display())))
+    write_text(to, file, value.trim())
 }
 
 fn write(dir: &Path, file: &str, value: u64) -> std::io::Result<()> {
-    std::fs::write(dir.join(file), value.to_string())
+    write_text(dir, file, &value.to_string())
+}
+
+/// Writes `text` to `file` in `dir`; an error names the file.
+fn write_text(dir: &Path, file: &str, text: &str) -> std::io::Result<()> {
+    std::fs::write(dir.join(file), text)
         .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", dir.join(file).display())))
 }
 

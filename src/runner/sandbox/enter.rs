@@ -39,27 +39,15 @@ impl EnterArgs {
     /// # Errors
     /// A message naming the bad argument.
     pub fn parse(args: &[OsString]) -> Result<EnterArgs, String> {
-        let mut out = EnterArgs::default();
-        let mut i = 0;
-        loop {
-            let Some(name) = args.get(i) else {
-                return Err("no command after --".into());
-            };
-            if name == "--" {
-                out.command = args[i + 1..].to_vec();
-                break;
-            }
+        let mut join = Vec::new();
+        let command = super::parse_step_args(args, |name, value| {
             if name != "--join" {
-                return Err(format!("unknown argument {}", name.to_string_lossy()));
+                return Err(format!("unknown argument {name}"));
             }
-            let path = args.get(i + 1).ok_or("--join needs a path")?;
-            out.join.push(PathBuf::from(path));
-            i += 2;
-        }
-        if out.command.is_empty() {
-            return Err("no command after --".into());
-        }
-        Ok(out)
+            join.push(PathBuf::from(value.ok_or("--join needs a path")?));
+            Ok(())
+        })?;
+        Ok(EnterArgs { join, command })
     }
 }
 

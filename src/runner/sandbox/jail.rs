@@ -59,30 +59,20 @@ impl JailArgs {
     /// A message naming the bad argument.
     pub fn parse(args: &[OsString]) -> Result<JailArgs, String> {
         let mut out = JailArgs::default();
-        let mut i = 0;
-        while i < args.len() {
-            let name = args[i].to_string_lossy();
-            if name == "--" {
-                out.command = args[i + 1..].to_vec();
-                break;
-            }
-            let value = args
-                .get(i + 1)
+        out.command = super::parse_step_args(args, |name, value| {
+            let value = value
                 .and_then(|v| v.to_str())
                 .and_then(|v| v.parse::<u64>().ok())
                 .ok_or_else(|| format!("{name} needs a number"))?;
-            match name.as_ref() {
+            match name {
                 "--uid" => out.uid = Some(u32::try_from(value).map_err(|e| e.to_string())?),
                 "--nproc" => out.nproc = Some(value),
                 "--fsize" => out.fsize = Some(value),
                 "--as" => out.address_space = Some(value),
                 _ => return Err(format!("unknown argument {name}")),
             }
-            i += 2;
-        }
-        if out.command.is_empty() {
-            return Err("no command after --".into());
-        }
+            Ok(())
+        })?;
         Ok(out)
     }
 }

@@ -40,6 +40,33 @@ pub const JAIL_SUBCOMMAND: &str = "sandbox-exec";
 /// The subcommand of the helper that runs [`enter::exec`].
 pub const ENTER_SUBCOMMAND: &str = "sandbox-enter";
 
+/// Reads a sandbox step's arguments, `--name value ... -- command...`: hands each
+/// option to `each` in order (its value `None` when the arguments end after its name),
+/// then returns the command.
+///
+/// # Errors
+/// What `each` refuses, or no command after `--`.
+fn parse_step_args(
+    args: &[std::ffi::OsString],
+    mut each: impl FnMut(&str, Option<&std::ffi::OsString>) -> Result<(), String>,
+) -> Result<Vec<std::ffi::OsString>, String> {
+    let mut i = 0;
+    while i < args.len() {
+        let name = args[i].to_string_lossy();
+        if name == "--" {
+            let command = args[i + 1..].to_vec();
+            return if command.is_empty() {
+                Err("no command after --".into())
+            } else {
+                Ok(command)
+            };
+        }
+        each(&name, args.get(i + 1))?;
+        i += 2;
+    }
+    Err("no command after --".into())
+}
+
 /// How bots are isolated.
 #[derive(Debug, Clone, Default)]
 pub enum Sandbox {
