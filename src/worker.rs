@@ -300,7 +300,9 @@ impl Worker {
         }
     }
 
-    async fn run(self) {
+    async fn run(mut self) {
+        // The worker's database work on its own core too.
+        self.storage = self.storage.for_this_thread();
         let lease_ms = self.config.lease.as_millis() as i64;
         while !self.shutdown.stop_claiming.is_cancelled() {
             // Register for a wake-up before looking, so a notification is not missed.

@@ -3,7 +3,7 @@
 //! server's, through the same queue and workers.
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -144,9 +144,17 @@ async fn play(
     }
     let mut maze_ids: Vec<i64> = Vec::new();
     let (mut duplicates, mut unplayable): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
+    let mut mazes = Vec::new();
     for f in &maze_files {
+        let name = f
+            .file_stem()
+            .map_or_else(|| "maze".into(), |s| s.to_string_lossy().into_owned());
+        mazes.push((name, crate::cli::load_maze(f)?));
+    }
+    let stored = registry::mazes::find_or_admit_all(&storage, mazes).await?;
+    for (f, row) in maze_files.iter().zip(stored) {
         let name = f.display().to_string();
-        match store_maze(&storage, f).await? {
+        match row.map(|r| r.maze_id) {
             None => unplayable.push(name),
             Some(id) if maze_ids.contains(&id) => duplicates.push(name),
             Some(id) => maze_ids.push(id),
@@ -297,15 +305,4 @@ async fn play(
         t.total
     );
     Ok(())
-}
-
-/// Stores a maze file (or finds it by layout); `None` when its goal cannot be reached.
-async fn store_maze(storage: &Storage, path: &Path) -> anyhow::Result<Option<i64>> {
-    let maze = crate::cli::load_maze(path)?;
-    let name = path
-        .file_stem()
-        .map_or_else(|| "maze".into(), |s| s.to_string_lossy().into_owned());
-    Ok(registry::mazes::find_or_admit(storage, &name, &maze)
-        .await?
-        .map(|row| row.maze_id))
 }

@@ -33,24 +33,63 @@ pub async fn admit(storage: &Storage, name: &str, text: &[u8], hidden: bool) -> 
     insert(storage, name, &maze, hidden, optimum).await
 }
 
-/// The stored maze with `maze`'s layout, or `maze` admitted as a public maze named
-/// `name`; `None` (nothing stored) when its goal room cannot be reached.
+/// Each of `mazes` (name and layout) as stored: the stored maze of its layout, or the
+/// maze admitted as a public maze under its name (the first of a layout given twice
+/// names it); `None` (nothing stored) when its goal room cannot be reached. The mazes
+/// are solved on every core and stored in one transaction.
 ///
 /// # Errors
 /// The database.
-pub async fn find_or_admit(storage: &Storage, name: &str, maze: &Maze) -> Result<Option<MazeRow>> {
-    let Some(optimum) = solver::solve(maze).map(|s| s.steps as i64) else {
-        return Ok(None);
-    };
-    if let Some(row) = storage.get_maze_by_hash(&maze.hash()).await? {
-        return Ok(Some(row));
-    }
-    match insert(storage, name, maze, false, Some(optimum)).await {
-        Ok(row) => Ok(Some(row)),
-        // Stored meanwhile by another process sharing the database.
-        Err(RegistryError::Conflict(_)) => Ok(storage.get_maze_by_hash(&maze.hash()).await?),
-        Err(e) => Err(e),
-    }
+pub async fn find_or_admit_all(
+    storage: &Storage,
+    mazes: Vec<(String, Maze)>,
+) -> Result<Vec<Option<MazeRow>>> {
+    let (mazes, optima) = super::bundles::blocking(move || {
+        let optima = optima(&mazes);
+        (mazes, optima)
+    })
+    .await?;
+    let hashes: Vec<String> = mazes.iter().map(|(_, m)| m.hash()).collect();
+    let layouts: Vec<String> = mazes.iter().map(|(_, m)| numeric::write(m)).collect();
+    let solvable: Vec<usize> = (0..mazes.len()).filter(|&i| optima[i].is_some()).collect();
+    let new: Vec<NewMaze> = solvable
+        .iter()
+        .map(|&i| NewMaze {
+            name: &mazes[i].0,
+            hash: &hashes[i],
+            dim: mazes[i].1.dim() as i64,
+            layout: &layouts[i],
+            hidden: false,
+            optimum: optima[i],
+        })
+        .collect();
+    let mut stored = storage.find_or_insert_mazes(&new).await?.into_iter();
+    Ok(optima
+        .iter()
+        .map(|o| o.and_then(|_| stored.next()))
+        .collect())
+}
+
+/// The optimum of each maze (`None`: its goal cannot be reached), the mazes shared
+/// out over the cores.
+fn optima(mazes: &[(String, Maze)]) -> Vec<Option<i64>> {
+    let per_thread = mazes.len().div_ceil(crate::worker::cores()).max(1);
+    std::thread::scope(|scope| {
+        let parts: Vec<_> = mazes
+            .chunks(per_thread)
+            .map(|part| {
+                scope.spawn(move || {
+                    part.iter()
+                        .map(|(_, m)| solver::solve(m).map(|s| s.steps as i64))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        parts
+            .into_iter()
+            .flat_map(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
 }
 
 async fn insert(
@@ -88,8 +127,29 @@ mod tests {
             .await
             .unwrap_err();
         assert!(matches!(err, RegistryError::Conflict(_)), "{err}");
-        let found = find_or_admit(&db, "x", &maze).await.unwrap().unwrap();
-        assert_eq!(found.maze_id, row.maze_id);
+        // Found by layout, not stored twice; a maze whose goal cannot be reached is not
+        // stored; a new one is stored under the first of its names.
+        let closed = numeric::parse(b"4\n0,0,0,0\n0,0,0,0\n0,0,0,0\n0,0,0,0\n").unwrap();
+        let open = crate::engine::generator::generate(12, 7).unwrap();
+        let found = find_or_admit_all(
+            &db,
+            vec![
+                ("x".into(), maze.clone()),
+                ("closed".into(), closed),
+                ("open".into(), open.clone()),
+                ("open again".into(), open),
+            ],
+        )
+        .await
+        .unwrap();
+        assert_eq!(found[0].as_ref().unwrap().maze_id, row.maze_id);
+        assert_eq!(found[0].as_ref().unwrap().name, "m");
+        assert!(found[1].is_none());
+        let new = found[2].as_ref().unwrap();
+        assert_eq!((new.name.as_str(), new.hidden), ("open", false));
+        assert!(new.optimum.is_some());
+        assert_eq!(found[3].as_ref(), Some(new));
+        assert_eq!(db.count_mazes().await.unwrap(), 2);
 
         let err = admit(&db, "bad", b"12\n1,2\n", false).await.unwrap_err();
         assert!(err.to_string().starts_with("invalid maze: "), "{err}");

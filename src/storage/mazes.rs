@@ -78,6 +78,64 @@ impl Storage {
         }
     }
 
+    /// Stores each of `mazes` whose layout is not stored yet (the first of a layout
+    /// given twice names it) and returns the stored row of each, in order: many mazes
+    /// in a few statements of one transaction.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn find_or_insert_mazes(&self, mazes: &[NewMaze<'_>]) -> Result<Vec<MazeRow>> {
+        /// Mazes an insert statement (7 parameters each) or a lookup (1 each) carries.
+        const ROWS_PER_INSERT: usize = 200;
+        const ROWS_PER_LOOKUP: usize = 500;
+        let now = now_ms();
+        let mut tx = self.pool().begin().await?;
+        for chunk in mazes.chunks(ROWS_PER_INSERT) {
+            let values = super::placeholders(chunk.len(), 7);
+            let sql = format!(
+                "insert into maze (name, hash, dim, layout, hidden, optimum, created_at)
+                 values {values} on conflict (hash) do nothing"
+            );
+            let mut query = sqlx::query(&sql);
+            for m in chunk {
+                query = query
+                    .bind(m.name)
+                    .bind(m.hash)
+                    .bind(m.dim)
+                    .bind(m.layout)
+                    .bind(i64::from(m.hidden))
+                    .bind(m.optimum)
+                    .bind(now);
+            }
+            query.execute(&mut *tx).await?;
+        }
+        let mut stored = std::collections::HashMap::new();
+        for chunk in mazes.chunks(ROWS_PER_LOOKUP) {
+            let sql = format!(
+                "select * from maze where hash in {}",
+                super::placeholders(1, chunk.len())
+            );
+            let mut query = sqlx::query_as::<_, MazeRow>(&sql);
+            for m in chunk {
+                query = query.bind(m.hash);
+            }
+            for row in query.fetch_all(&mut *tx).await? {
+                stored.insert(row.hash.clone(), row);
+            }
+        }
+        tx.commit().await?;
+        mazes
+            .iter()
+            .map(|m| {
+                // Only a maze deleted meanwhile can be missing.
+                stored
+                    .get(m.hash)
+                    .cloned()
+                    .ok_or(StorageError::Database(sqlx::Error::RowNotFound))
+            })
+            .collect()
+    }
+
     /// A maze by id.
     ///
     /// # Errors
@@ -156,6 +214,54 @@ mod tests {
                 db.get_maze(row.maze_id).await.unwrap().unwrap().layout,
                 m.layout
             );
+        }
+    }
+
+    #[tokio::test]
+    async fn many_mazes_are_stored_once_each_in_order() {
+        for (db, _guard) in backends().await {
+            let old = db
+                .insert_maze(&NewMaze {
+                    name: "stored before",
+                    hash: "h1",
+                    dim: 2,
+                    layout: "2\n3,6\n9,12\n",
+                    hidden: true,
+                    optimum: Some(1),
+                })
+                .await
+                .unwrap();
+            // 450 mazes: more than one statement's worth; h1 is stored already, and
+            // h7 is given twice.
+            let hashes: Vec<String> = (0..450).map(|i| format!("h{i}")).collect();
+            let names: Vec<String> = (0..450).map(|i| format!("m{i}")).collect();
+            let mut given: Vec<NewMaze> = (0..450)
+                .map(|i| NewMaze {
+                    name: &names[i],
+                    hash: &hashes[i],
+                    dim: 2,
+                    layout: "2\n3,6\n9,12\n",
+                    hidden: false,
+                    optimum: Some(i as i64),
+                })
+                .collect();
+            given.push(NewMaze {
+                name: "second h7",
+                ..given[7].clone()
+            });
+            let rows = db.find_or_insert_mazes(&given).await.unwrap();
+            assert_eq!(rows.len(), given.len());
+            for (row, m) in rows.iter().zip(&given) {
+                assert_eq!(row.hash, m.hash);
+            }
+            assert_eq!(rows[1], old, "a stored maze is found, not changed");
+            assert_eq!(rows[7].name, "m7", "the first of a layout names it");
+            assert_eq!(rows[450].maze_id, rows[7].maze_id);
+            assert_eq!(rows[300].optimum, Some(300));
+            assert!(!rows[300].hidden);
+            assert_eq!(db.count_mazes().await.unwrap(), 450);
+            // Stored in the order given.
+            assert!(rows[2].maze_id < rows[3].maze_id && rows[3].maze_id < rows[449].maze_id);
         }
     }
 }

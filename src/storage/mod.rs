@@ -134,6 +134,9 @@ pub struct Storage {
     writes: std::sync::Arc<tokio::sync::Mutex<()>>,
     /// See [`Storage::with_max_retries`].
     max_retries: i64,
+    /// How to open another SQLite connection (see [`Storage::for_this_thread`]);
+    /// `None` on PostgreSQL.
+    sqlite_options: Option<AnyConnectOptions>,
 }
 
 impl Storage {
@@ -165,19 +168,11 @@ impl Storage {
                     format!("{url}?mode=rwc")
                 };
                 let options = AnyConnectOptions::from_str(&url).map_err(bad_url)?;
-                let pool = AnyPoolOptions::new()
-                    .max_connections(8)
-                    .acquire_timeout(Duration::from_secs(30))
-                    .after_connect(|conn, _| {
-                        Box::pin(async move {
-                            conn.execute(sqlite_pragmas().as_str()).await?;
-                            Ok(())
-                        })
-                    })
-                    .connect_with(options)
-                    .await?;
+                let pool = sqlite_pool(8).connect_with(options.clone()).await?;
                 sqlx::migrate!("migrations/sqlite").run(&pool).await?;
-                Storage::ready(pool, backend).await
+                let mut storage = Storage::ready(pool, backend).await?;
+                storage.sqlite_options = Some(options);
+                Ok(storage)
             }
             Backend::Postgres => {
                 let options = AnyConnectOptions::from_str(url).map_err(bad_url)?;
@@ -206,6 +201,7 @@ impl Storage {
             backend,
             writes: std::sync::Arc::default(),
             max_retries: retries::MAX_MATCH_RETRIES,
+            sqlite_options: None,
         };
         storage.convert_inline_records().await?;
         Ok(storage)
@@ -218,6 +214,30 @@ impl Storage {
     pub fn with_max_retries(mut self, retries: i64) -> Storage {
         self.max_retries = retries.max(0);
         self
+    }
+
+    /// This storage (the same database, write turn and settings) with a connection of
+    /// its own for the calling thread.
+    ///
+    /// A SQLite connection does its work on a thread of its own, and a new thread starts
+    /// with the CPU affinity of the thread that made it. A match worker pinned to a core
+    /// calls this after pinning itself, so its claims and record writes run on its own
+    /// core, which idles while it waits for them, instead of taking turns on the other
+    /// core with the match played there. The connection is opened on first use, from
+    /// the task that uses it, and kept (no idle or lifetime limit). PostgreSQL does its
+    /// work in its own server processes: the storage is returned as it is.
+    pub fn for_this_thread(&self) -> Storage {
+        let Some(options) = &self.sqlite_options else {
+            return self.clone();
+        };
+        Storage {
+            pool: sqlite_pool(1)
+                .min_connections(0)
+                .idle_timeout(None)
+                .max_lifetime(None)
+                .connect_lazy_with(options.clone()),
+            ..self.clone()
+        }
     }
 
     /// How many times a match whose lease expired is re-queued.
@@ -313,6 +333,20 @@ impl From<Flag> for bool {
     }
 }
 
+/// The options of a SQLite pool of at most `connections`; each connection starts with
+/// [`sqlite_pragmas`].
+fn sqlite_pool(connections: u32) -> AnyPoolOptions {
+    AnyPoolOptions::new()
+        .max_connections(connections)
+        .acquire_timeout(Duration::from_secs(30))
+        .after_connect(|conn, _| {
+            Box::pin(async move {
+                conn.execute(sqlite_pragmas().as_str()).await?;
+                Ok(())
+            })
+        })
+}
+
 /// The settings each SQLite connection starts with.
 fn sqlite_pragmas() -> String {
     format!(
@@ -320,6 +354,19 @@ fn sqlite_pragmas() -> String {
          pragma busy_timeout = {};",
         BUSY_TIMEOUT.as_millis()
     )
+}
+
+/// `rows` groups of `columns` numbered placeholders: `($1, $2), ($3, $4)`.
+pub(crate) fn placeholders(rows: usize, columns: usize) -> String {
+    (0..rows)
+        .map(|r| {
+            let row: Vec<String> = (1..=columns)
+                .map(|c| format!("${}", r * columns + c))
+                .collect();
+            format!("({})", row.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Whether an error is a unique-constraint violation.
@@ -330,6 +377,80 @@ pub(crate) fn is_unique_violation(e: &sqlx::Error) -> bool {
 #[cfg(test)]
 mod tests {
     use super::test_support::backends;
+
+    /// The threads of this process and the cores each may run on.
+    fn threads() -> Vec<(String, String, String)> {
+        let mut found = Vec::new();
+        for task in std::fs::read_dir("/proc/self/task").unwrap().flatten() {
+            let status = std::fs::read_to_string(task.path().join("status")).unwrap_or_default();
+            let field = |name: &str| {
+                status
+                    .lines()
+                    .find_map(|l| l.strip_prefix(name))
+                    .map(|v| v.trim().to_string())
+                    .unwrap_or_default()
+            };
+            found.push((
+                task.file_name().to_string_lossy().into_owned(),
+                field("Name:"),
+                field("Cpus_allowed_list:"),
+            ));
+        }
+        found
+    }
+
+    #[test]
+    fn a_thread_s_own_sqlite_connection_works_on_the_thread_s_core() {
+        let dir = tempfile::tempdir().unwrap();
+        let url = format!("sqlite://{}", dir.path().join("t.db").display());
+        let runtime = tokio::runtime::Runtime::new().unwrap();
+        let storage = runtime.block_on(super::Storage::open(&url)).unwrap();
+        let core = *crate::runner::affinity::allowed_cores().last().unwrap();
+        let shared = storage.clone();
+        let opened_before = storage.pool().size();
+        let row = std::thread::spawn(move || {
+            crate::runner::affinity::pin_current_thread(core).unwrap();
+            let before: Vec<String> = threads().into_iter().map(|t| t.0).collect();
+            let local = tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()
+                .unwrap();
+            let own = shared.for_this_thread();
+            let row = local.block_on(async {
+                own.ping().await.unwrap();
+                assert_eq!(own.count_mazes().await.unwrap(), 0);
+                let m = crate::storage::test_support::maze();
+                own.insert_maze(&crate::storage::mazes::NewMaze {
+                    name: "m",
+                    hash: &m.hash(),
+                    dim: 2,
+                    layout: "2\n3,6\n9,12\n",
+                    hidden: false,
+                    optimum: None,
+                })
+                .await
+                .unwrap()
+            });
+            // One connection of its own, started from this thread: its thread keeps to
+            // this thread's core.
+            assert_eq!(own.pool().size(), 1);
+            let started: Vec<_> = threads()
+                .into_iter()
+                .filter(|t| !before.contains(&t.0) && t.1.starts_with("sqlx-sqlite"))
+                .collect();
+            assert!(
+                started.iter().any(|t| t.2 == core.to_string()),
+                "no SQLite thread on core {core} among those started: {started:?}"
+            );
+            row
+        })
+        .join()
+        .unwrap();
+        // The shared pool opened nothing for that work, and sees its write.
+        assert_eq!(storage.pool().size(), opened_before);
+        let seen = runtime.block_on(storage.get_maze(row.maze_id)).unwrap();
+        assert_eq!(seen, Some(row));
+    }
 
     #[tokio::test]
     async fn both_backends_have_the_same_tables_and_columns() {

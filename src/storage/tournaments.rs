@@ -52,24 +52,33 @@ impl Storage {
         .fetch_one(&mut *tx)
         .await?;
         // Interleave bots so that partial progress is comparable across bots.
+        let mut matches = Vec::new();
         for repeat in 0..repeats {
             for &maze_id in maze_ids {
                 for &bot_version_id in bot_version_ids {
-                    sqlx::query(
-                        "insert into match (bot_version_id, maze_id, seed, tournament_id, repeat, priority, created_at)
-                         values ($1, $2, $3, $4, $5, $6, $7)",
-                    )
+                    matches.push((bot_version_id, maze_id, repeat));
+                }
+            }
+        }
+        // A few statements of many rows (7 parameters a row), queued in this order.
+        for chunk in matches.chunks(200) {
+            let sql = format!(
+                "insert into match (bot_version_id, maze_id, seed, tournament_id, repeat, priority, created_at)
+                 values {}",
+                super::placeholders(chunk.len(), 7)
+            );
+            let mut query = sqlx::query(&sql);
+            for &(bot_version_id, maze_id, repeat) in chunk {
+                query = query
                     .bind(bot_version_id)
                     .bind(maze_id)
                     .bind(repeat)
                     .bind(id)
                     .bind(repeat)
                     .bind(PRIORITY_TOURNAMENT)
-                    .bind(now)
-                    .execute(&mut *tx)
-                    .await?;
-                }
+                    .bind(now);
             }
+            query.execute(&mut *tx).await?;
         }
         tx.commit().await?;
         Ok(self
