@@ -103,6 +103,13 @@ print(f"The machine's own scaling, measured in the same rounds: benches/spin.c (
       f"no I/O) takes {spin1 / 1000:.2f} s alone and {spin2 / 1000:.2f} s as two copies at once: "
       f"{2 * spin1 / spin2:.2f}x.")
 print()
+def rounds(one, two):
+    pairs = zip(map(int, sys.argv[one].split()), map(int, sys.argv[two].split()))
+    return ", ".join(f"{a / b:.2f}x" for a, b in pairs)
+spins = [2 * a / b for a, b in zip(map(int, sys.argv[14].split()), map(int, sys.argv[15].split()))]
+print(f"Round by round (each round's `--jobs 1` over its `--jobs 2`): without the sandbox "
+      f"{rounds(2, 3)}; with it {rounds(4, 5)}; spin.c {', '.join(f'{x:.2f}x' for x in spins)}.")
+print()
 print(f"Scaling `--jobs 2` / `--jobs 1`: {walls[0] / walls[1]:.2f}x without the sandbox, "
       f"{walls[2] / walls[3]:.2f}x with it (target: at least 1.9x). The sandbox costs "
       f"{(walls[3] / walls[1] - 1) * 100:.0f}% of the wall time with two jobs "

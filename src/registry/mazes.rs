@@ -51,16 +51,16 @@ pub async fn find_or_admit_all(
     .await?;
     let hashes: Vec<String> = mazes.iter().map(|(_, m)| m.hash()).collect();
     let layouts: Vec<String> = mazes.iter().map(|(_, m)| numeric::write(m)).collect();
-    let solvable: Vec<usize> = (0..mazes.len()).filter(|&i| optima[i].is_some()).collect();
-    let new: Vec<NewMaze> = solvable
-        .iter()
-        .map(|&i| NewMaze {
-            name: &mazes[i].0,
-            hash: &hashes[i],
-            dim: mazes[i].1.dim() as i64,
-            layout: &layouts[i],
-            hidden: false,
-            optimum: optima[i],
+    let new: Vec<NewMaze> = (0..mazes.len())
+        .filter_map(|i| {
+            optima[i].map(|optimum| NewMaze {
+                name: &mazes[i].0,
+                hash: &hashes[i],
+                dim: mazes[i].1.dim() as i64,
+                layout: &layouts[i],
+                hidden: false,
+                optimum: Some(optimum),
+            })
         })
         .collect();
     let mut stored = storage.find_or_insert_mazes(&new).await?.into_iter();
