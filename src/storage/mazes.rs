@@ -43,25 +43,36 @@ pub struct NewMaze<'a> {
     pub optimum: Option<i64>,
 }
 
-impl Storage {
-    /// Stores a maze.
-    ///
-    /// # Errors
-    /// [`StorageError::Conflict`] naming the existing maze when the same layout is stored.
-    pub async fn insert_maze(&self, m: &NewMaze<'_>) -> Result<MazeRow> {
-        let inserted = sqlx::query_as(
-            "insert into maze (name, hash, dim, layout, hidden, optimum, created_at)
-             values ($1, $2, $3, $4, $5, $6, $7) returning *",
-        )
+/// The start of a maze insert; `values` and its rows follow, 7 parameters a row.
+const INSERT: &str =
+    "insert into maze (name, hash, dim, layout, hidden, optimum, created_at) values";
+
+/// `query` with `m`'s 7 values bound next, as stored at `now`.
+fn bind<'q>(
+    query: sqlx::query::QueryAs<'q, sqlx::Any, MazeRow, sqlx::any::AnyArguments<'q>>,
+    m: &NewMaze<'q>,
+    now: i64,
+) -> sqlx::query::QueryAs<'q, sqlx::Any, MazeRow, sqlx::any::AnyArguments<'q>> {
+    query
         .bind(m.name)
         .bind(m.hash)
         .bind(m.dim)
         .bind(m.layout)
         .bind(i64::from(m.hidden))
         .bind(m.optimum)
-        .bind(now_ms())
-        .fetch_one(self.pool())
-        .await;
+        .bind(now)
+}
+
+impl Storage {
+    /// Stores a maze.
+    ///
+    /// # Errors
+    /// [`StorageError::Conflict`] naming the existing maze when the same layout is stored.
+    pub async fn insert_maze(&self, m: &NewMaze<'_>) -> Result<MazeRow> {
+        let sql = format!("{INSERT} {} returning *", super::placeholders(1, 7));
+        let inserted = bind(sqlx::query_as(&sql), m, now_ms())
+            .fetch_one(self.pool())
+            .await;
         match inserted {
             Ok(row) => Ok(row),
             Err(e) if is_unique_violation(&e) => {
@@ -91,23 +102,15 @@ impl Storage {
         let now = now_ms();
         let mut tx = self.pool().begin().await?;
         for chunk in mazes.chunks(ROWS_PER_INSERT) {
-            let values = super::placeholders(chunk.len(), 7);
             let sql = format!(
-                "insert into maze (name, hash, dim, layout, hidden, optimum, created_at)
-                 values {values} on conflict (hash) do nothing"
+                "{INSERT} {} on conflict (hash) do nothing returning *",
+                super::placeholders(chunk.len(), 7)
             );
-            let mut query = sqlx::query(&sql);
+            let mut query = sqlx::query_as::<_, MazeRow>(&sql);
             for m in chunk {
-                query = query
-                    .bind(m.name)
-                    .bind(m.hash)
-                    .bind(m.dim)
-                    .bind(m.layout)
-                    .bind(i64::from(m.hidden))
-                    .bind(m.optimum)
-                    .bind(now);
+                query = bind(query, m, now);
             }
-            query.execute(&mut *tx).await?;
+            query.fetch_all(&mut *tx).await?;
         }
         let mut stored = std::collections::HashMap::new();
         for chunk in mazes.chunks(ROWS_PER_LOOKUP) {
