@@ -145,9 +145,23 @@ impl Builder {
             tracing::error!(cause = %e, "cannot make a build folder");
             return Ended::Dropped;
         }
-        if let Err(e) = registry::bundles::unpack_stored(&self.storage, sha, &dir).await {
-            tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "cannot fetch a version's files to build them");
-            return Ended::Dropped;
+        match registry::bundles::unpack_stored(&self.storage, sha, &dir).await {
+            Ok(_) => {}
+            // Missing or damaged in the database: building again cannot help.
+            Err(e) if e.is_permanent() => {
+                tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "a version's stored files cannot be used; its build failed");
+                return Ended::Done {
+                    built: None,
+                    log: format!(
+                        "the server could not use the version's stored files: {e}; upload it again"
+                    ),
+                };
+            }
+            // The database or this machine's disk: built again after the lease.
+            Err(e) => {
+                tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "cannot fetch a version's files to build them");
+                return Ended::Dropped;
+            }
         }
         tracing::info!(bot_version_id = version.bot_version_id, %command, "building");
         let (ok, mut log) = match build::build_logged(&command, &dir, &self.sandbox).await {

@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
-use crate::support::{ADMIN, TestServer, register, root, simple_bot_files, wait_match};
+use crate::support::{ADMIN, TestServer, register, root, simple_bot_files, wait_built, wait_match};
 
 #[tokio::test]
 async fn pages_and_lists_answer_bad_input_with_json_4xx() {
@@ -298,19 +298,6 @@ async fn hidden_mazes_layouts_never_appear_in_any_page() {
     // The ranking appears at / once the hidden maze has been played on.
     let board = page(&server, "/").await;
     assert!(board.contains("<h1>Ranking</h1>"), "{board}");
-}
-
-async fn wait_built(server: &TestServer, bot: i64) -> Value {
-    let deadline = Instant::now() + Duration::from_secs(120);
-    loop {
-        let (_, v) = server.get(&format!("/api/bots/{bot}"), None).await;
-        let last = v["versions"].as_array().unwrap().last().unwrap().clone();
-        if last["build_status"] != "building" {
-            return last;
-        }
-        assert!(Instant::now() < deadline, "the build did not end: {v}");
-        tokio::time::sleep(Duration::from_millis(200)).await;
-    }
 }
 
 #[tokio::test]

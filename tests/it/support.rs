@@ -347,6 +347,21 @@ pub async fn register(
     )
 }
 
+/// Waits (at most 120 s) until the build of bot `bot`'s latest version has ended;
+/// returns that version's public view.
+pub async fn wait_built(server: &TestServer, bot: i64) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let (_, v) = server.get(&format!("/api/bots/{bot}"), None).await;
+        let last = v["versions"].as_array().unwrap().last().unwrap().clone();
+        if last["build_status"] != "building" {
+            return last;
+        }
+        assert!(Instant::now() < deadline, "the build did not end: {v}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+}
+
 /// Waits (at most 60 s) until match `id` has a final status; returns its view.
 pub async fn wait_match(server: &TestServer, id: i64) -> Value {
     let deadline = Instant::now() + Duration::from_secs(60);

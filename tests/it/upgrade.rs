@@ -129,8 +129,21 @@ async fn a_data_folder_of_an_earlier_release_moves_into_the_database() {
     assert!(storage.get_bundle(&files.sha256).await.unwrap().is_some());
 }
 
+/// A process the test started, killed and reaped when the test ends, also by a failed
+/// assertion: nothing is left running.
+struct KilledOnDrop(std::process::Child);
+
+impl Drop for KilledOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// A bundle damaged in the database (its files no longer give its hash) never plays:
 /// the worker refuses it, and the match is recorded as crashed with the reason, once.
+/// A version waiting for its build whose files are damaged fails its build, with the
+/// reason in its build log (it is not claimed again at every lease's end).
 #[tokio::test(flavor = "multi_thread")]
 async fn a_damaged_bundle_is_refused_by_the_worker_and_its_match_says_why() {
     use mazearena::storage::Storage;
@@ -165,21 +178,39 @@ async fn a_damaged_bundle_is_refused_by_the_worker_and_its_match_says_why() {
         .set_version_bundles(version.bot_version_id, Some(&forged), None)
         .await
         .unwrap();
-
-    let mut worker = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
-        .args([
-            "worker",
-            "--jobs",
-            "1",
-            "--database",
-            &server.database,
-            "--data-dir",
-        ])
-        .arg(dir.path().join("worker"))
-        .env("MAZEARENA_SANDBOX", crate::support::sandbox().level())
-        .stderr(std::process::Stdio::null())
-        .spawn()
+    // The same for a version that waits for its build (this server builds nothing).
+    let (s, built) = server
+        .post(
+            "/api/bots",
+            serde_json::json!({"name": "tampered-build", "command": "python3 simple_bot.py",
+                "build": "python3 -c pass", "files": crate::support::simple_bot_files()}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 201, "{built}");
+    let built_bot = built["bot_id"].as_i64().unwrap();
+    let waiting = storage.bot_versions(built_bot).await.unwrap().remove(0);
+    storage
+        .set_version_bundles(waiting.bot_version_id, Some(&forged), None)
+        .await
         .unwrap();
+
+    let mut worker = KilledOnDrop(
+        std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
+            .args([
+                "worker",
+                "--jobs",
+                "1",
+                "--database",
+                &server.database,
+                "--data-dir",
+            ])
+            .arg(dir.path().join("worker"))
+            .env("MAZEARENA_SANDBOX", crate::support::sandbox().level())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
     let (s, queued) = server
         .post(
             "/api/matches",
@@ -190,11 +221,25 @@ async fn a_damaged_bundle_is_refused_by_the_worker_and_its_match_says_why() {
     assert_eq!(s, 202, "{queued}");
     let id = queued["match_id"].as_i64().unwrap();
     let done = crate::support::wait_match(&server, id).await;
+    let version = crate::support::wait_built(&server, built_bot).await;
+    assert_eq!(version["build_status"], "build_failed", "{version}");
+    let (_, mine) = server
+        .get(
+            &format!("/api/bots/{built_bot}"),
+            built["owner_token"].as_str(),
+        )
+        .await;
+    let log = mine["versions"][0]["build_log_tail"].as_str().unwrap();
+    assert!(
+        log.starts_with("the server could not use the version's stored files")
+            && log.contains("refused"),
+        "{log}"
+    );
     let _ = nix::sys::signal::kill(
-        nix::unistd::Pid::from_raw(worker.id() as i32),
+        nix::unistd::Pid::from_raw(worker.0.id() as i32),
         nix::sys::signal::Signal::SIGTERM,
     );
-    assert!(worker.wait().unwrap().success());
+    assert!(worker.0.wait().unwrap().success());
     assert_eq!(
         (&done["status"], &done["attempts"]),
         (&serde_json::json!("crashed"), &serde_json::json!(1)),
