@@ -96,20 +96,20 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn find_or_insert_mazes(&self, mazes: &[NewMaze<'_>]) -> Result<Vec<MazeRow>> {
-        /// Mazes an insert statement (7 parameters each) or a lookup (1 each) carries.
-        const ROWS_PER_INSERT: usize = 200;
+        /// Mazes a lookup (1 parameter each) carries.
         const ROWS_PER_LOOKUP: usize = 500;
         let now = now_ms();
         let mut tx = self.pool().begin().await?;
-        for chunk in mazes.chunks(ROWS_PER_INSERT) {
+        for chunk in mazes.chunks(super::ROWS_PER_INSERT) {
             let sql = format!(
-                "{INSERT} {} on conflict (hash) do nothing returning *",
+                "{INSERT} {} on conflict (hash) do nothing",
                 super::placeholders(chunk.len(), 7)
             );
             let mut query = sqlx::query_as::<_, MazeRow>(&sql);
             for m in chunk {
                 query = bind(query, m, now);
             }
+            // The rows, new and old, are read once below.
             query.fetch_all(&mut *tx).await?;
         }
         let mut stored = std::collections::HashMap::new();

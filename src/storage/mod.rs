@@ -134,9 +134,8 @@ pub struct Storage {
     writes: std::sync::Arc<tokio::sync::Mutex<()>>,
     /// See [`Storage::with_max_retries`].
     max_retries: i64,
-    /// How to open another SQLite connection (see [`Storage::for_this_thread`]);
-    /// `None` on PostgreSQL.
-    sqlite_options: Option<AnyConnectOptions>,
+    /// How the pool's connections are opened (see [`Storage::for_this_thread`]).
+    options: AnyConnectOptions,
 }
 
 impl Storage {
@@ -170,9 +169,7 @@ impl Storage {
                 let options = AnyConnectOptions::from_str(&url).map_err(bad_url)?;
                 let pool = sqlite_pool(8).connect_with(options.clone()).await?;
                 sqlx::migrate!("migrations/sqlite").run(&pool).await?;
-                let mut storage = Storage::ready(pool, backend).await?;
-                storage.sqlite_options = Some(options);
-                Ok(storage)
+                Storage::ready(pool, backend, options).await
             }
             Backend::Postgres => {
                 let options = AnyConnectOptions::from_str(url).map_err(bad_url)?;
@@ -191,17 +188,17 @@ impl Storage {
             .connect_with(options.clone())
             .await?;
         sqlx::migrate!("migrations/postgres").run(&pool).await?;
-        Storage::ready(pool, Backend::Postgres).await
+        Storage::ready(pool, Backend::Postgres, options.clone()).await
     }
 
     /// The storage on a migrated `pool`, once records of earlier releases are converted.
-    async fn ready(pool: AnyPool, backend: Backend) -> Result<Storage> {
+    async fn ready(pool: AnyPool, backend: Backend, options: AnyConnectOptions) -> Result<Storage> {
         let storage = Storage {
             pool,
             backend,
             writes: std::sync::Arc::default(),
             max_retries: retries::MAX_MATCH_RETRIES,
-            sqlite_options: None,
+            options,
         };
         storage.convert_inline_records().await?;
         Ok(storage)
@@ -227,16 +224,16 @@ impl Storage {
     /// the task that uses it, and kept (no idle or lifetime limit). PostgreSQL does its
     /// work in its own server processes: the storage is returned as it is.
     pub fn for_this_thread(&self) -> Storage {
-        let Some(options) = &self.sqlite_options else {
-            return self.clone();
-        };
-        Storage {
-            pool: sqlite_pool(1)
-                .min_connections(0)
-                .idle_timeout(None)
-                .max_lifetime(None)
-                .connect_lazy_with(options.clone()),
-            ..self.clone()
+        match self.backend {
+            Backend::Postgres => self.clone(),
+            Backend::Sqlite => Storage {
+                pool: sqlite_pool(1)
+                    .min_connections(0)
+                    .idle_timeout(None)
+                    .max_lifetime(None)
+                    .connect_lazy_with(self.options.clone()),
+                ..self.clone()
+            },
         }
     }
 
@@ -355,6 +352,10 @@ fn sqlite_pragmas() -> String {
         BUSY_TIMEOUT.as_millis()
     )
 }
+
+/// The most rows one multi-row insert carries (7 parameters a row at most: well under
+/// either database's limit on parameters).
+pub(crate) const ROWS_PER_INSERT: usize = 200;
 
 /// `rows` groups of `columns` numbered placeholders: `($1, $2), ($3, $4)`.
 pub(crate) fn placeholders(rows: usize, columns: usize) -> String {

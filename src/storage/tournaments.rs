@@ -61,7 +61,7 @@ impl Storage {
             }
         }
         // A few statements of many rows (7 parameters a row), queued in this order.
-        for chunk in matches.chunks(200) {
+        for chunk in matches.chunks(super::ROWS_PER_INSERT) {
             let sql = format!(
                 "insert into match (bot_version_id, maze_id, seed, tournament_id, repeat, priority, created_at)
                  values {}",
