@@ -18,6 +18,7 @@ use crate::registry::{self, RegistryError};
 use crate::runner::{Sandbox, build};
 use crate::storage::Storage;
 use crate::storage::bots::BotVersionRow;
+use crate::storage::builds::{MAX_BUILD_ATTEMPTS, build_retries_exhausted};
 
 /// How often the queue of builds is looked at when nothing wakes the builder.
 const POLL: Duration = Duration::from_secs(2);
@@ -31,6 +32,8 @@ pub struct Builder {
     pub sandbox: Sandbox,
     /// A local folder for build folders.
     pub scratch: PathBuf,
+    /// The bound of each build's writable area, in bytes.
+    pub write_limit: u64,
     /// The claimer's name (the pool's lease owner).
     pub owner: Arc<str>,
     /// The lease on a claimed build, renewed every third of it.
@@ -121,6 +124,17 @@ impl Builder {
     }
 
     async fn build(&self, version: &BotVersionRow) -> Ended {
+        if version.build_attempts > MAX_BUILD_ATTEMPTS {
+            tracing::warn!(
+                bot_version_id = version.bot_version_id,
+                attempts = version.build_attempts,
+                "a build kept outliving its worker; recorded as failed"
+            );
+            return Ended::Done {
+                built: None,
+                log: build_retries_exhausted(version.build_attempts - 1),
+            };
+        }
         let command = version.build_command.clone().unwrap_or_default();
         let Some(sha) = &version.bundle_sha256 else {
             return Ended::Done {
@@ -130,21 +144,14 @@ impl Builder {
                     .into(),
             };
         };
-        let folder = match tempfile::Builder::new()
-            .prefix(&format!("build-{}-", version.bot_version_id))
-            .tempdir_in(&self.scratch)
-        {
-            Ok(f) => f,
+        let area = match build::BuildArea::new(&self.scratch, self.write_limit) {
+            Ok(a) => a,
             Err(e) => {
                 tracing::error!(cause = %e, dir = %self.scratch.display(), "cannot make a build folder");
                 return Ended::Dropped;
             }
         };
-        let dir = folder.path().join("bot");
-        if let Err(e) = std::fs::create_dir(&dir) {
-            tracing::error!(cause = %e, "cannot make a build folder");
-            return Ended::Dropped;
-        }
+        let dir = area.work().to_path_buf();
         match registry::bundles::unpack_stored(&self.storage, sha, &dir).await {
             Ok(_) => {}
             // Missing or damaged in the database: building again cannot help.
@@ -164,7 +171,7 @@ impl Builder {
             }
         }
         tracing::info!(bot_version_id = version.bot_version_id, %command, "building");
-        let (ok, mut log) = match build::build_logged(&command, &dir, &self.sandbox).await {
+        let (ok, mut log) = match build::build_logged(&command, &area, &self.sandbox).await {
             Ok(o) => {
                 let mut log = o.log;
                 if !o.ok {

@@ -62,6 +62,8 @@ pub struct WorkerConfig {
     /// Build the versions waiting for their build, in this local folder; `None`: this
     /// pool builds nothing (a local tournament, whose bots are built by the caller).
     pub builds: Option<PathBuf>,
+    /// The bound of each build's writable area, in bytes.
+    pub build_write_bytes: u64,
 }
 
 /// How often a reported worker refreshes its row (and looks for expired leases).
@@ -155,6 +157,7 @@ pub fn spawn_workers(
             storage: reporter.storage.clone(),
             sandbox: config.sandbox.clone(),
             scratch: scratch.clone(),
+            write_limit: config.build_write_bytes,
             owner: owner.clone(),
             lease: config.lease,
         };

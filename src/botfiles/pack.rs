@@ -2,9 +2,9 @@
 //! `.tar.gz` of it ([`pack_dir`]), the form in which bundles are stored.
 
 use std::collections::BTreeMap;
-use std::fs::{self, File};
+use std::fs;
 use std::io::{self, Read};
-use std::os::unix::fs::PermissionsExt;
+use std::os::unix::fs::{MetadataExt, OpenOptionsExt, PermissionsExt};
 use std::path::Path;
 
 use sha2::{Digest, Sha256};
@@ -118,7 +118,15 @@ fn walk_dir(
             let kind = meta.file_type();
             if kind.is_dir() {
                 if let Some(tar) = out.as_deref_mut() {
-                    append(tar, &path, ::tar::EntryType::Directory, 0o755, &[], None)?;
+                    append(
+                        tar,
+                        &path,
+                        ::tar::EntryType::Directory,
+                        0o755,
+                        0,
+                        io::empty(),
+                        None,
+                    )?;
                 }
                 nodes.insert(path.clone(), Node::Dir { explicit: true });
                 stack.push(path);
@@ -136,30 +144,65 @@ fn walk_dir(
                         &path,
                         ::tar::EntryType::Symlink,
                         0o777,
-                        &[],
+                        0,
+                        io::empty(),
                         Some(&target),
                     )?;
                 }
                 nodes.insert(path, Node::Symlink { target });
             } else if kind.is_file() {
-                let mut content = Vec::new();
-                File::open(&full)
-                    .and_then(|mut f| f.read_to_end(&mut content))
-                    .map_err(io_err(&full, "read"))?;
-                total += content.len() as u64;
+                // Judged by its metadata before a byte is read: its size against what
+                // is left, its holes, its setuid and setgid bits.
+                let size = meta.len();
+                let mode = meta.permissions().mode();
+                if mode & 0o6000 != 0 {
+                    return Err(super::format::special(&path, "a setuid or setgid file"));
+                }
+                total += size;
                 if total > limits.max_total_bytes {
                     return Err(BundleError::TooLarge {
                         limit: limits.max_total_bytes,
                         path: Some(path),
                     });
                 }
-                let exec = meta.permissions().mode() & 0o111 != 0;
-                if let Some(tar) = out.as_deref_mut() {
-                    let mode = if exec { 0o755 } else { 0o644 };
-                    append(tar, &path, ::tar::EntryType::Regular, mode, &content, None)?;
+                if size.saturating_sub(meta.blocks().saturating_mul(512)) > MAX_HOLE_BYTES {
+                    return Err(super::format::special(&path, "a sparse file (with holes)"));
                 }
-                let sha: [u8; 32] = Sha256::digest(&content).into();
-                let size = content.len() as u64;
+                let file = fs::OpenOptions::new()
+                    .read(true)
+                    .custom_flags(libc::O_NOFOLLOW)
+                    .open(&full)
+                    .map_err(io_err(&full, "read"))?;
+                let mut reader = Hashing {
+                    inner: file.take(size),
+                    sha: Sha256::new(),
+                    read: 0,
+                };
+                let exec = mode & 0o111 != 0;
+                match out.as_deref_mut() {
+                    Some(tar) => {
+                        let mode = if exec { 0o755 } else { 0o644 };
+                        append(
+                            tar,
+                            &path,
+                            ::tar::EntryType::Regular,
+                            mode,
+                            size,
+                            &mut reader,
+                            None,
+                        )?;
+                    }
+                    None => {
+                        io::copy(&mut reader, &mut io::sink()).map_err(io_err(&full, "read"))?;
+                    }
+                }
+                if reader.read != size {
+                    return Err(BundleError::Io {
+                        action: format!("read {}", full.display()),
+                        source: io::Error::other("the file changed while it was read"),
+                    });
+                }
+                let sha: [u8; 32] = reader.sha.finalize().into();
                 nodes.insert(path, Node::File { exec, size, sha });
             } else {
                 return Err(super::format::special(&path, "a special file"));
@@ -180,19 +223,41 @@ fn walk_dir(
     })
 }
 
+/// Holes a file may have before it counts as sparse and is refused (file systems
+/// round and compress; a file with large holes would be read as its whole length).
+const MAX_HOLE_BYTES: u64 = 1 << 20;
+
+/// A reader that hashes what it reads and counts it.
+struct Hashing<R> {
+    inner: R,
+    sha: Sha256,
+    read: u64,
+}
+
+impl<R: Read> Read for Hashing<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.sha.update(&buf[..n]);
+        self.read += n as u64;
+        Ok(n)
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn append(
     tar: &mut ::tar::Builder<flate2::write::GzEncoder<Vec<u8>>>,
     path: &str,
     kind: ::tar::EntryType,
     mode: u32,
-    content: &[u8],
+    size: u64,
+    content: impl Read,
     link: Option<&str>,
 ) -> Result<(), BundleError> {
     let mut header = ::tar::Header::new_gnu();
     header.set_entry_type(kind);
     header.set_mode(mode);
     header.set_mtime(0);
-    header.set_size(content.len() as u64);
+    header.set_size(size);
     let io = |e: io::Error| BundleError::Io {
         action: format!("pack {path:?}"),
         source: e,
@@ -299,5 +364,40 @@ mod tests {
         let empty = tempfile::tempdir().unwrap();
         let err = hash_dir(empty.path(), &BundleLimits::default(), &skip_nothing).unwrap_err();
         assert!(matches!(err, BundleError::NoFiles), "{err:?}");
+    }
+
+    #[test]
+    fn sparse_huge_and_setuid_files_are_refused_from_their_metadata() {
+        let d = tempfile::tempdir().unwrap();
+        fs::write(d.path().join("bot.py"), "x").unwrap();
+        // 64 GiB of holes: refused at once, never read (reading it would take minutes
+        // and, held in memory, 64 GiB).
+        let huge = fs::File::create(d.path().join("holes")).unwrap();
+        huge.set_len(64 << 30).unwrap();
+        let started = std::time::Instant::now();
+        let err = pack_dir(d.path(), &BundleLimits::default(), &skip_nothing).unwrap_err();
+        assert!(matches!(err, BundleError::TooLarge { .. }), "{err:?}");
+        assert!(started.elapsed() < std::time::Duration::from_secs(2));
+        // Within the size limit but with holes: refused as sparse.
+        huge.set_len(8 << 20).unwrap();
+        let err = pack_dir(d.path(), &BundleLimits::default(), &skip_nothing).unwrap_err();
+        assert!(
+            matches!(&err, BundleError::SpecialFile { kind, .. } if kind.contains("sparse")),
+            "{err:?}"
+        );
+        fs::remove_file(d.path().join("holes")).unwrap();
+        let id = d.path().join("id");
+        fs::write(&id, "ELF").unwrap();
+        fs::set_permissions(&id, fs::Permissions::from_mode(0o4755)).unwrap();
+        let err = pack_dir(d.path(), &BundleLimits::default(), &skip_nothing).unwrap_err();
+        assert!(
+            matches!(&err, BundleError::SpecialFile { kind, .. } if kind.contains("setuid")),
+            "{err:?}"
+        );
+        fs::set_permissions(&id, fs::Permissions::from_mode(0o2755)).unwrap();
+        assert!(pack_dir(d.path(), &BundleLimits::default(), &skip_nothing).is_err());
+        fs::set_permissions(&id, fs::Permissions::from_mode(0o755)).unwrap();
+        let packed = pack_dir(d.path(), &BundleLimits::default(), &skip_nothing).unwrap();
+        assert_eq!(packed.summary.files, 2);
     }
 }

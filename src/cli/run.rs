@@ -93,7 +93,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         scratch_mb: args.scratch_mb.max(1),
         ..Limits::default()
     };
-    let sandbox = args.sandbox.open(&[])?;
+    let sandbox = args.sandbox.open(&[], true)?;
     runner::botenv::check(&args.bot_env)?;
     let bot = BotSpec {
         command: args.bot.clone(),

@@ -6,7 +6,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 
 use crate::runner::Sandbox;
-use crate::runner::sandbox::{Check, enter, jail};
+use crate::runner::sandbox::{Check, Setup, enter, jail};
 
 /// How bots are isolated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -25,15 +25,37 @@ pub struct SandboxArgs {
     /// bot then runs as your user and can read, write and signal what you can).
     #[arg(long, env = "MAZEARENA_SANDBOX", value_enum, default_value = "full")]
     pub sandbox: SandboxChoice,
+    /// A language runtime's install folder that bots may use, mounted read-only in
+    /// every bot's view, its `bin` first on their PATH (repeatable; a venv brings its
+    /// base interpreter): a pyenv version, a venv, a Node prefix, a rustup toolchain, a
+    /// JDK, a Go root. Never a home folder or a folder holding dotfiles. In the
+    /// environment: folders separated by `:`.
+    #[arg(
+        long = "runtime",
+        value_name = "DIR",
+        env = "MAZEARENA_RUNTIMES",
+        value_delimiter = ':'
+    )]
+    pub runtimes: Vec<PathBuf>,
 }
 
 impl SandboxArgs {
-    /// Sets up the chosen isolation; `hide` lists paths that must never be visible to
-    /// a bot (data dir, database).
+    /// What the full sandbox is set up with: `hide` lists paths that must never be
+    /// visible to a bot (data dir, database); `local` finds each bot's runtime from its
+    /// program too (`run`, `tournament`: the owner is the operator).
+    pub fn setup(&self, hide: &[PathBuf], local: bool) -> Setup {
+        Setup {
+            hide: hide.to_vec(),
+            runtimes: self.runtimes.clone(),
+            detect: local,
+        }
+    }
+
+    /// Sets up the chosen isolation (see [`SandboxArgs::setup`]).
     ///
     /// # Errors
     /// `full` was asked and cannot be had here: the reason, and how to see more.
-    pub fn open(&self, hide: &[PathBuf]) -> anyhow::Result<Sandbox> {
+    pub fn open(&self, hide: &[PathBuf], local: bool) -> anyhow::Result<Sandbox> {
         match self.sandbox {
             SandboxChoice::None => {
                 eprintln!(
@@ -43,7 +65,7 @@ impl SandboxArgs {
             }
             SandboxChoice::Full => {
                 let exe = std::env::current_exe().context("cannot find the mazearena binary")?;
-                Sandbox::full(&exe, hide).map_err(|e| {
+                Sandbox::full(&exe, &self.setup(hide, local)).map_err(|e| {
                     anyhow::anyhow!(
                         "{e}\n`mazearena doctor` shows what works here; `--sandbox none` runs bots unisolated (only for bots you trust)"
                     )
@@ -59,6 +81,9 @@ pub struct DoctorArgs {
     /// Print the checks as JSON.
     #[arg(long)]
     json: bool,
+    /// The runtimes to check, as `serve --runtime` takes them.
+    #[command(flatten)]
+    sandbox: SandboxArgs,
 }
 
 /// Prints every isolation mechanism and whether it works here. Fails (exit status 1)
@@ -68,7 +93,7 @@ pub struct DoctorArgs {
 /// The full sandbox is not available.
 pub fn doctor(args: DoctorArgs) -> anyhow::Result<()> {
     let exe = std::env::current_exe().context("cannot find the mazearena binary")?;
-    let (checks, result) = Sandbox::doctor(&exe);
+    let (checks, result) = Sandbox::doctor(&exe, &args.sandbox.setup(&[], false));
     if args.json {
         let v = serde_json::json!({
             "sandbox": result.as_ref().map_or("none", Sandbox::level),

@@ -90,6 +90,11 @@ pub(super) struct PoolArgs {
     /// `DATA_DIR/cache`), in MiB; the least recently used bots beyond it are removed.
     #[arg(long, env = "MAZEARENA_CACHE_MIB", default_value_t = DEFAULT_CACHE_BYTES >> 20)]
     cache_mib: u64,
+    /// The most a bot's build may write, in MiB: its folder (a tmpfs of this size when
+    /// the server runs as root) and, apart, its /tmp; over it the build fails.
+    #[arg(long, env = "MAZEARENA_BUILD_WRITE_MIB", default_value_t = crate::runner::build::DEFAULT_BUILD_WRITE_BYTES >> 20,
+          value_parser = clap::value_parser!(u64).range(1..=65536))]
+    build_write_mib: u64,
 }
 
 impl PoolArgs {
@@ -138,6 +143,7 @@ impl PoolArgs {
             report_as: Some(role),
             cache,
             builds: Some(builds),
+            build_write_bytes: self.build_write_mib << 20,
         })
     }
 
@@ -169,7 +175,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
     let sandbox = args
         .sandbox
-        .open(&hidden_paths(&data_dir, &args.database))
+        .open(&hidden_paths(&data_dir, &args.database), false)
         .context("refusing to serve without the sandbox")?;
     let storage = args.pool.storage(
         Storage::open(&args.database)

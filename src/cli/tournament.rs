@@ -92,7 +92,7 @@ pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
         );
     }
     let maze_files = maze_files(&args.mazes)?;
-    let sandbox = args.sandbox.open(&[])?;
+    let sandbox = args.sandbox.open(&[], true)?;
     let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
     let mut built = std::collections::BTreeSet::new();
     for b in &bots {
@@ -228,6 +228,7 @@ async fn play(
                 DEFAULT_CACHE_BYTES,
             )?,
             builds: None,
+            build_write_bytes: crate::runner::build::DEFAULT_BUILD_WRITE_BYTES,
         },
         None,
         Arc::new(Notify::new()),

@@ -46,7 +46,7 @@ async fn work(args: WorkerArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
     let sandbox = args
         .sandbox
-        .open(&hidden_paths(&data_dir, &args.database))
+        .open(&hidden_paths(&data_dir, &args.database), false)
         .context("refusing to play matches without the sandbox")?;
     let storage = args.pool.storage(
         Storage::open(&args.database)

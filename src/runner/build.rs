@@ -1,17 +1,161 @@
 //! Running a bot's build command (`bot.toml`'s `build`), which is as untrusted as the bot:
 //! in the sandbox, with the bot's folder writable so that what it builds stays, no
 //! network, and the match limits; without the sandbox, directly in the folder.
+//!
+//! A server's build runs in a [`BuildArea`] of its own: as root, a tmpfs of bounded size
+//! (`nosuid,nodev`, mode 0700) owned by the build's own unprivileged uid, which the build
+//! runs as (never host uid 0); otherwise a 0700 folder whose use is watched. Each file is
+//! bounded by RLIMIT_FSIZE, and a build that fills its area fails with the reason.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::sandbox::{Sandbox, jail};
+use super::sandbox::{Sandbox, UidLease, jail};
+
+/// The default bound of a build's writable area (its folder, and its `/tmp` apart).
+pub const DEFAULT_BUILD_WRITE_BYTES: u64 = 256 << 20;
+
+/// How often a build's writable area is measured while it runs.
+const AREA_POLL: Duration = Duration::from_millis(250);
+
+/// Free space under which a mounted area counts as filled.
+const FULL_MARGIN_BYTES: u64 = 64 * 1024;
+
+/// The writable folder of one build.
+#[derive(Debug)]
+pub struct BuildArea {
+    /// The temporary folder holding the area (removed when dropped); `None` in place.
+    _holder: Option<tempfile::TempDir>,
+    /// The build's working folder.
+    work: PathBuf,
+    /// True when `work` is a tmpfs of ours (unmounted when dropped).
+    mounted: bool,
+    /// The bound, in bytes.
+    limit: u64,
+    /// True when the build runs as a uid of its own (a fresh area, as root).
+    own_uid: bool,
+}
+
+impl BuildArea {
+    /// A fresh area under `parent` bounded by `limit` bytes: as root a tmpfs of that size
+    /// (`nosuid,nodev`, 0700) for a build that runs as a uid of its own; otherwise (or
+    /// when the tmpfs cannot be mounted, logged) a 0700 folder whose use is watched.
+    ///
+    /// # Errors
+    /// The folder cannot be made.
+    pub fn new(parent: &Path, limit: u64) -> std::io::Result<BuildArea> {
+        let holder = tempfile::Builder::new()
+            .prefix("build-")
+            .tempdir_in(parent)?;
+        let work = holder.path().join("work");
+        std::fs::create_dir(&work)?;
+        let root = nix::unistd::geteuid().is_root();
+        let mut mounted = false;
+        if root {
+            use nix::mount::{MsFlags, mount};
+            match mount(
+                Some("tmpfs"),
+                &work,
+                Some("tmpfs"),
+                MsFlags::MS_NOSUID | MsFlags::MS_NODEV,
+                Some(format!("size={limit},mode=0700").as_str()),
+            ) {
+                Ok(()) => mounted = true,
+                Err(e) => tracing::warn!(
+                    cause = %e,
+                    "cannot mount a tmpfs for a build: its folder's size is watched instead"
+                ),
+            }
+        }
+        Ok(BuildArea {
+            _holder: Some(holder),
+            work,
+            mounted,
+            limit,
+            own_uid: root,
+        })
+    }
+
+    /// The folder `dir` itself as a build's area (a local bot's folder, built where it
+    /// is, as the runner's own user): its use is watched against `limit`.
+    pub fn in_place(dir: &Path, limit: u64) -> BuildArea {
+        BuildArea {
+            _holder: None,
+            work: dir.to_path_buf(),
+            mounted: false,
+            limit,
+            own_uid: false,
+        }
+    }
+
+    /// The build's working folder: put its files here before, read the result after.
+    pub fn work(&self) -> &Path {
+        &self.work
+    }
+
+    /// The bound, in bytes.
+    pub fn limit(&self) -> u64 {
+        self.limit
+    }
+
+    /// Whether the build has filled its area (a mounted area: less than 64 KiB free;
+    /// a watched one: more than its bound in blocks on the disk).
+    fn filled(&self) -> bool {
+        if self.mounted {
+            return nix::sys::statvfs::statvfs(&self.work).is_ok_and(|s| {
+                s.blocks_available() * s.fragment_size() < FULL_MARGIN_BYTES
+            });
+        }
+        disk_usage(&self.work) > self.limit
+    }
+}
+
+impl Drop for BuildArea {
+    fn drop(&mut self) {
+        if self.mounted {
+            let _ = nix::mount::umount2(&self.work, nix::mount::MntFlags::MNT_DETACH);
+        }
+    }
+}
+
+/// Bytes of disk blocks held by the files below `dir` (links not followed).
+fn disk_usage(dir: &Path) -> u64 {
+    use std::os::unix::fs::MetadataExt;
+    let mut total = 0u64;
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let Ok(meta) = e.metadata() else { continue };
+            total += meta.blocks() * 512;
+            if meta.is_dir() {
+                stack.push(e.path());
+            }
+        }
+    }
+    total
+}
+
+/// Gives the files below `dir` (which the runner made) to `uid`, links not followed.
+fn chown_tree(dir: &Path, uid: u32) -> std::io::Result<()> {
+    let mut stack = vec![dir.to_path_buf()];
+    std::os::unix::fs::lchown(dir, Some(uid), Some(uid))?;
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d)? {
+            let e = e?;
+            std::os::unix::fs::lchown(e.path(), Some(uid), Some(uid))?;
+            if e.file_type()?.is_dir() {
+                stack.push(e.path());
+            }
+        }
+    }
+    Ok(())
+}
 
 /// The longest a build may take.
 pub const BUILD_TIMEOUT: Duration = Duration::from_secs(600);
-
-/// The scratch (`/tmp`) size of a build, in bytes.
-const BUILD_SCRATCH_BYTES: u64 = 1 << 30;
 
 /// Processes and threads a build may have at once.
 const BUILD_PROCESS_LIMIT: u64 = 256;
@@ -60,12 +204,14 @@ pub struct BuildOutcome {
     pub log: String,
 }
 
-/// Runs `command` in `dir` under `sandbox`, waiting at most [`BUILD_TIMEOUT`].
+/// Runs `command` in `dir` (in place, as the runner's user) under `sandbox`, waiting at
+/// most [`BUILD_TIMEOUT`], its writes bounded by [`DEFAULT_BUILD_WRITE_BYTES`].
 ///
 /// # Errors
 /// [`BuildError`] when it cannot run, fails or takes too long.
 pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), BuildError> {
-    let outcome = build_logged(command, dir, sandbox).await?;
+    let area = BuildArea::in_place(dir, DEFAULT_BUILD_WRITE_BYTES);
+    let outcome = build_logged(command, &area, sandbox).await?;
     if outcome.ok {
         return Ok(());
     }
@@ -89,17 +235,19 @@ pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), B
     })
 }
 
-/// Runs `command` in `dir` under `sandbox` with the build limits (time
-/// [`BUILD_TIMEOUT`], memory [`BUILD_MEMORY_BYTES`] where a cgroup can be made, output
-/// kept to its last [`BUILD_LOG_BYTES`]), and returns how it ended with its output.
+/// Runs `command` in `area` under `sandbox` with the build limits (time
+/// [`BUILD_TIMEOUT`], memory [`BUILD_MEMORY_BYTES`] where a cgroup can be made, the
+/// area's bound on what it writes, output kept to its last [`BUILD_LOG_BYTES`]), and
+/// returns how it ended with its output.
 ///
 /// # Errors
 /// [`BuildError`] only when it cannot be started at all.
 pub async fn build_logged(
     command: &str,
-    dir: &Path,
+    area: &BuildArea,
     sandbox: &Sandbox,
 ) -> Result<BuildOutcome, BuildError> {
+    let dir = area.work();
     let words = shlex::split(command)
         .filter(|w| !w.is_empty())
         .ok_or_else(|| BuildError::BadCommand(command.to_string()))?;
@@ -108,6 +256,7 @@ pub async fn build_logged(
         source,
     };
     let mut cgroup = None;
+    let mut uid = None;
     let mut cmd = match sandbox {
         Sandbox::None => {
             let mut cmd = tokio::process::Command::new(&words[0]);
@@ -115,8 +264,23 @@ pub async fn build_logged(
             cmd
         }
         Sandbox::Full(full) => {
-            let args = super::sandbox::bwrap_args(full, Some(dir), BUILD_SCRATCH_BYTES, true, &[])
-                .map_err(spawn_err)?;
+            let sandbox_err = |e: String| spawn_err(std::io::Error::other(e));
+            if full.as_root && area.own_uid {
+                let lease = UidLease::take().map_err(sandbox_err)?;
+                chown_tree(dir, lease.uid()).map_err(spawn_err)?;
+                uid = Some(lease);
+            }
+            let runtimes = full.runtimes_for(&words[0], dir).map_err(sandbox_err)?;
+            let args = super::sandbox::bwrap_args(
+                full,
+                Some(dir),
+                area.limit,
+                super::sandbox::Work::Build {
+                    own_uid: uid.is_some(),
+                },
+                &runtimes,
+            )
+            .map_err(spawn_err)?;
             if let Ok(root) = &full.cgroups {
                 cgroup = Some(
                     root.create(super::sandbox::cgroup::CgroupLimits {
@@ -128,7 +292,9 @@ pub async fn build_logged(
                 );
             }
             let jail = jail::JailArgs {
-                nproc: (!full.as_root).then_some(BUILD_PROCESS_LIMIT),
+                uid: uid.as_ref().map(UidLease::uid),
+                nproc: (!full.as_root || uid.is_some()).then_some(BUILD_PROCESS_LIMIT),
+                fsize: Some(area.limit),
                 command: words.iter().map(Into::into).collect(),
                 ..jail::JailArgs::default()
             };
@@ -148,7 +314,26 @@ pub async fn build_logged(
     drop(cmd);
     let log = tokio::task::spawn_blocking(move || read_tail_blocking(reader, BUILD_LOG_BYTES));
     let pid = child.id();
-    let waited = tokio::time::timeout(BUILD_TIMEOUT, child.wait()).await;
+    let mut filled = false;
+    let watched = async {
+        let mut poll = tokio::time::interval(AREA_POLL);
+        loop {
+            tokio::select! {
+                status = child.wait() => return status,
+                _ = poll.tick() => {
+                    if !filled && area.filled() {
+                        filled = true;
+                        if let Some(pid) = pid {
+                            super::sandbox::proctree::kill_tree(pid);
+                            super::process::kill_group(pid);
+                        }
+                    }
+                }
+            }
+        }
+    };
+    let waited = tokio::time::timeout(BUILD_TIMEOUT, watched).await;
+    filled = filled || area.filled();
     if let Some(pid) = pid {
         super::sandbox::proctree::kill_tree(pid);
         super::process::kill_group(pid);
@@ -177,9 +362,20 @@ pub async fn build_logged(
             BUILD_MEMORY_BYTES >> 20
         ));
     }
+    if filled {
+        log.push_str(&format!(
+            "\n[the build wrote more than {} MiB]",
+            area.limit >> 20
+        ));
+    }
+    drop(uid);
     Ok(BuildOutcome {
-        ok: ok && !oom,
-        status,
+        ok: ok && !oom && !filled,
+        status: if filled {
+            format!("the build wrote more than {} MiB", area.limit >> 20)
+        } else {
+            status
+        },
         log,
     })
 }

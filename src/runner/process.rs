@@ -122,7 +122,14 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
     let (mut cmd, cgroup, uid) = match launch.sandbox {
         Sandbox::None => (direct(launch, &words), None, None),
         Sandbox::Full(full) => {
-            let uid = full.as_root.then(UidLease::take);
+            let uid = full
+                .as_root
+                .then(UidLease::take)
+                .transpose()
+                .map_err(LaunchError::Sandbox)?;
+            let runtimes = full
+                .runtimes_for(&words[0], launch.dir)
+                .map_err(LaunchError::Sandbox)?;
             let cgroup = match &full.cgroups {
                 Ok(root) => Some(
                     root.create(CgroupLimits {
@@ -139,8 +146,8 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 full,
                 Some(launch.dir),
                 launch.scratch_bytes,
-                false,
-                launch.env,
+                super::sandbox::Work::Match,
+                &runtimes,
             )
             .map_err(|e| LaunchError::Spawn {
                 program: words[0].clone(),
@@ -160,6 +167,11 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 }),
                 fsize: Some(launch.scratch_bytes),
                 address_space: None,
+                env: launch
+                    .env
+                    .iter()
+                    .map(|(k, v)| (k.into(), v.into()))
+                    .collect(),
                 command: std::iter::once(in_sandbox(&words[0], launch.dir))
                     .chain(words[1..].iter().map(Into::into))
                     .collect(),

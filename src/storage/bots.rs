@@ -72,6 +72,9 @@ pub struct BotVersionRow {
     pub bundle_sha256: Option<String>,
     /// The stored bundle of its folder after its build, once built.
     pub built_sha256: Option<String>,
+    /// How many times its build has been claimed (a claim whose worker died counts).
+    #[sqlx(default)]
+    pub build_attempts: i64,
 }
 
 impl BotVersionRow {

@@ -11,10 +11,24 @@ use crate::runner::outcome::MatchStatus;
 /// How much of a build's output is kept for its owner: the last 64 KiB.
 pub const BUILD_LOG_BYTES: usize = 64 * 1024;
 
+/// How many times a build is claimed at most: a build whose worker died while it ran
+/// (its lease expired) is claimed again, and the claim after the last is recorded as
+/// `build_failed` ([`build_retries_exhausted`]) instead of running it, as matches are.
+pub const MAX_BUILD_ATTEMPTS: i64 = 3;
+
+/// The log of a build that used up its attempts.
+pub fn build_retries_exhausted(attempts: i64) -> String {
+    format!(
+        "the build was running each time its worker stopped ({attempts} attempts); it is not \
+         tried again: a build must not bring its worker down (memory, disk, time)"
+    )
+}
+
 impl Storage {
     /// Claims the oldest version waiting for its build, for `owner` until `lease_ms`
     /// from now: no other worker builds it meanwhile. A build whose worker died (its
-    /// lease expired) is claimed again.
+    /// lease expired) is claimed again; each claim counts in `build_attempts`, and the
+    /// claimer records a claim past [`MAX_BUILD_ATTEMPTS`] as failed.
     ///
     /// # Errors
     /// Database failures.
@@ -26,7 +40,8 @@ impl Storage {
             Backend::Postgres => "for update skip locked",
         };
         Ok(sqlx::query_as(&format!(
-            "update bot_version set build_owner = $1, build_lease_expires_at = $2
+            "update bot_version set build_owner = $1, build_lease_expires_at = $2,
+                 build_attempts = build_attempts + 1
              where bot_version_id = (
                  select bot_version_id from bot_version
                  where build_status = $3
@@ -186,6 +201,7 @@ mod tests {
             // w1's claim has expired: w2 takes the build over and w1 can no longer end it.
             let again = db.claim_build("w2", 60_000).await.unwrap().unwrap();
             assert_eq!(again.bot_version_id, v.bot_version_id);
+            assert_eq!((claimed.build_attempts, again.build_attempts), (1, 2));
             assert!(
                 !db.finish_build(v.bot_version_id, "w1", false, None, "late")
                     .await

@@ -57,8 +57,11 @@ pub fn fixture_bot(name: &str, args: &[&str]) -> BotSpec {
 pub fn sandbox() -> Sandbox {
     static SANDBOX: std::sync::OnceLock<Sandbox> = std::sync::OnceLock::new();
     SANDBOX
-        .get_or_init(
-            || match Sandbox::full(Path::new(env!("CARGO_BIN_EXE_mazearena")), &[]) {
+        .get_or_init(|| {
+            match Sandbox::full(
+                Path::new(env!("CARGO_BIN_EXE_mazearena")),
+                &mazearena::runner::sandbox::Setup::default(),
+            ) {
                 Ok(s) => s,
                 Err(e) if std::env::var("CI").is_ok_and(|v| v == "true") => {
                     panic!("CI=true and the sandbox is missing: {e}")
@@ -67,8 +70,8 @@ pub fn sandbox() -> Sandbox {
                     eprintln!("NOTE: bots run without the sandbox in these tests: {e}");
                     Sandbox::None
                 }
-            },
-        )
+            }
+        })
         .clone()
 }
 

@@ -30,6 +30,9 @@ pub struct JailArgs {
     pub fsize: Option<u64>,
     /// Per-process address-space limit (RLIMIT_AS), in bytes.
     pub address_space: Option<u64>,
+    /// Variables declared by the bot's owner: applied only to the bot's own program, at
+    /// its `exec`, after every wall is up (never to bubblewrap or to this step).
+    pub env: Vec<(OsString, OsString)>,
     /// The bot's program and arguments.
     pub command: Vec<OsString>,
 }
@@ -48,6 +51,13 @@ impl JailArgs {
         opt("--nproc", self.nproc);
         opt("--fsize", self.fsize);
         opt("--as", self.address_space);
+        for (k, v) in &self.env {
+            let mut kv = k.clone();
+            kv.push("=");
+            kv.push(v);
+            out.push("--env".into());
+            out.push(kv);
+        }
         out.push("--".into());
         out.extend(self.command.iter().cloned());
         out
@@ -60,6 +70,21 @@ impl JailArgs {
     pub fn parse(args: &[OsString]) -> Result<JailArgs, String> {
         let mut out = JailArgs::default();
         out.command = super::parse_step_args(args, |name, value| {
+            if name == "--env" {
+                // Kept as bytes, unread: it means something only to the bot's program.
+                use std::os::unix::ffi::OsStrExt;
+                let kv = value.ok_or("--env needs KEY=VALUE")?.as_bytes();
+                let eq = kv
+                    .iter()
+                    .position(|&b| b == b'=')
+                    .filter(|&i| i > 0)
+                    .ok_or("--env needs KEY=VALUE")?;
+                out.env.push((
+                    std::ffi::OsStr::from_bytes(&kv[..eq]).to_os_string(),
+                    std::ffi::OsStr::from_bytes(&kv[eq + 1..]).to_os_string(),
+                ));
+                return Ok(());
+            }
             let value = value
                 .and_then(|v| v.to_str())
                 .and_then(|v| v.parse::<u64>().ok())
@@ -82,8 +107,11 @@ impl JailArgs {
 pub fn exec(args: &JailArgs) -> String {
     match setup(args) {
         Ok(()) => {
+            // The owner's variables join the runner's here, at the bot's own exec: a
+            // loader variable (LD_PRELOAD, ...) acts on the bot alone, inside its walls.
             let err = std::process::Command::new(&args.command[0])
                 .args(&args.command[1..])
+                .envs(args.env.iter().map(|(k, v)| (k, v)))
                 .exec();
             format!("could not start {:?}: {err}", args.command[0])
         }
@@ -161,6 +189,11 @@ mod tests {
             nproc: Some(64),
             fsize: Some(1 << 26),
             address_space: None,
+            env: vec![
+                ("LD_PRELOAD".into(), "/sandbox/work/x.so".into()),
+                ("A".into(), "b=c d".into()),
+                ("E".into(), "".into()),
+            ],
             command: vec!["python3".into(), "bot.py".into(), "--x".into()],
         };
         assert_eq!(JailArgs::parse(&args.to_args()).unwrap(), args);
@@ -172,5 +205,7 @@ mod tests {
         assert!(parse(&["--uid", "x", "--", "a"]).is_err());
         assert!(parse(&["--bogus", "1", "--", "a"]).is_err());
         assert!(parse(&["--nproc", "3"]).is_err());
+        assert!(parse(&["--env", "NOEQUALS", "--", "a"]).is_err());
+        assert!(parse(&["--env", "=x", "--", "a"]).is_err());
     }
 }

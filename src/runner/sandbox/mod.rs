@@ -90,10 +90,24 @@ pub struct FullSandbox {
     /// The cgroup hierarchy for whole-match limits, or why there is none (then the
     /// watchdog enforces them).
     pub cgroups: Result<cgroup::CgroupRoot, String>,
-    /// Language runtimes' install roots outside `/usr`, mounted read-only.
-    pub runtime_roots: Vec<PathBuf>,
-    /// The environment every bot gets.
-    pub env: Vec<(String, String)>,
+    /// The operator's runtimes (`--runtime`), mounted read-only in every bot's view.
+    pub runtimes: Vec<view::Runtime>,
+    /// Whether the runtime of each bot's own program is found and mounted too (local
+    /// runs, where the owner is the operator; never on a server).
+    pub detect: bool,
+    /// Paths no runtime may hold (data folder, database).
+    pub hide: Vec<PathBuf>,
+}
+
+/// What the full sandbox is set up with.
+#[derive(Debug, Clone, Default)]
+pub struct Setup {
+    /// Paths that must never be visible to a bot (data folder, database).
+    pub hide: Vec<PathBuf>,
+    /// The operator's runtime list: install prefixes mounted read-only for every bot.
+    pub runtimes: Vec<PathBuf>,
+    /// Find each bot's runtime from its program (`run`, `tournament`).
+    pub detect: bool,
 }
 
 impl FullSandbox {
@@ -162,18 +176,17 @@ impl Sandbox {
 
     /// Sets up the full sandbox with `helper` as the `mazearena` binary (usually
     /// `std::env::current_exe()`), and proves that it works by running a command in it.
-    /// `hide` lists paths (data dir, database) that must never be inside a mounted
-    /// runtime root.
+    /// `setup` says which runtimes are mounted and what no runtime may hold.
     ///
     /// # Errors
     /// [`Unavailable`] with the reason when bubblewrap is missing or cannot make the
-    /// namespaces, or the jail step fails.
-    pub fn full(helper: &Path, hide: &[PathBuf]) -> Result<Sandbox, Unavailable> {
-        Sandbox::full_tested(helper, hide).map(|(sandbox, _)| sandbox)
+    /// namespaces, a listed runtime cannot be used, or the jail step fails.
+    pub fn full(helper: &Path, setup: &Setup) -> Result<Sandbox, Unavailable> {
+        Sandbox::full_tested(helper, setup).map(|(sandbox, _)| sandbox)
     }
 
     /// [`Sandbox::full`], with the fields of `/proc/self/status` its test command saw.
-    fn full_tested(helper: &Path, hide: &[PathBuf]) -> Result<(Sandbox, Status), Unavailable> {
+    fn full_tested(helper: &Path, setup: &Setup) -> Result<(Sandbox, Status), Unavailable> {
         let bwrap = find_program("bwrap").ok_or_else(|| {
             Unavailable(
                 "bubblewrap (`bwrap`) is not installed (Debian: apt-get install bubblewrap)".into(),
@@ -187,8 +200,9 @@ impl Sandbox {
             helper,
             as_root: nix::unistd::geteuid().is_root(),
             cgroups: cgroup::CgroupRoot::detect(),
-            runtime_roots: view::runtime_roots(hide),
-            env: view::bot_env(),
+            runtimes: view::listed_runtimes(&setup.runtimes, &setup.hide).map_err(Unavailable)?,
+            detect: setup.detect,
+            hide: setup.hide.clone(),
         };
         let sandbox = Sandbox::Full(Arc::new(full));
         let status = sandbox.self_test()?;
@@ -208,8 +222,12 @@ impl Sandbox {
         let Sandbox::Full(full) = self else {
             return Err(Unavailable("no sandbox".into()));
         };
-        let lease = full.as_root.then(UidLease::take);
-        let args = view::bwrap_args(full, None, 1 << 20, false, &[])
+        let lease = full
+            .as_root
+            .then(UidLease::take)
+            .transpose()
+            .map_err(Unavailable)?;
+        let args = view::bwrap_args(full, None, 1 << 20, Work::Match, &full.runtimes)
             .map_err(|e| Unavailable(e.to_string()))?;
         let jail = jail::JailArgs {
             uid: lease.as_ref().map(UidLease::uid),
@@ -236,8 +254,9 @@ impl Sandbox {
             .collect())
     }
 
-    /// Every mechanism and whether it works here, for `mazearena doctor`.
-    pub fn doctor(helper: &Path) -> (Vec<Check>, Result<Sandbox, Unavailable>) {
+    /// Every mechanism and whether it works here, for `mazearena doctor`, and every
+    /// mount of a bot's view with the reason it is there.
+    pub fn doctor(helper: &Path, setup: &Setup) -> (Vec<Check>, Result<Sandbox, Unavailable>) {
         let check = |name: &str, ok: bool, detail: String| Check {
             name: name.into(),
             ok,
@@ -268,7 +287,7 @@ impl Sandbox {
                 "not root: each match gets a user namespace".into()
             },
         ));
-        let (result, status) = match Sandbox::full_tested(helper, &[]) {
+        let (result, status) = match Sandbox::full_tested(helper, setup) {
             Ok((sandbox, status)) => (Ok(sandbox), status),
             Err(e) => (Err(e), Status::new()),
         };
@@ -325,19 +344,26 @@ impl Sandbox {
                 ),
             },
         ));
-        if let Ok(Sandbox::Full(f)) = &result {
-            checks.push(check(
-                "runtimes",
-                true,
-                format!(
-                    "mounted read-only besides /usr: {}",
-                    f.runtime_roots
-                        .iter()
-                        .map(|p| p.display().to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ));
+        let runtimes = match &result {
+            Ok(Sandbox::Full(f)) => f.runtimes.clone(),
+            _ => Vec::new(),
+        };
+        checks.push(check(
+            "runtimes",
+            true,
+            if runtimes.is_empty() {
+                "none listed: bots see the system's runtimes only (add one with --runtime DIR)"
+                    .into()
+            } else {
+                runtimes
+                    .iter()
+                    .map(|r| r.prefix.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+        ));
+        for (at, why) in view::describe(&runtimes) {
+            checks.push(check("mount", true, format!("{at}: {why}")));
         }
         (checks, result)
     }
@@ -367,3 +393,23 @@ pub fn find_program(name: &str) -> Option<PathBuf> {
 }
 
 pub(crate) use view::bwrap_args;
+pub use view::{Runtime, Work, runtime_of_program};
+
+impl FullSandbox {
+    /// The runtimes mounted for a bot or build whose program is `program`: the
+    /// operator's, and on local runs the one the program comes from.
+    ///
+    /// # Errors
+    /// The program's own runtime cannot be used, and why.
+    pub fn runtimes_for(&self, program: &str, bot_dir: &Path) -> Result<Vec<Runtime>, String> {
+        let mut all = self.runtimes.clone();
+        if self.detect {
+            for r in runtime_of_program(program, bot_dir, &self.hide)? {
+                if !all.iter().any(|o| o.prefix == r.prefix) {
+                    all.push(r);
+                }
+            }
+        }
+        Ok(all)
+    }
+}

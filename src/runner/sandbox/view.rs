@@ -21,18 +21,11 @@ const ETC_FILES: &[&str] = &[
     "/etc/ssl/openssl.cnf",
 ];
 
-/// Environment variables passed on to bots (all others are cleared).
-const PASSED_ENV: &[&str] = &[
-    "PATH",
-    "LANG",
-    "LC_ALL",
-    "TZ",
-    "PYENV_ROOT",
-    "PYENV_VERSION",
-    "RUSTUP_HOME",
-    "CARGO_HOME",
-    "RUSTUP_TOOLCHAIN",
-];
+/// Environment variables of the runner's passed on to bots (all others are cleared).
+const PASSED_ENV: &[&str] = &["LANG", "LC_ALL", "TZ"];
+
+/// The system part of a bot's `PATH`, after its runtimes' `bin` folders.
+const SYSTEM_PATH: &str = "/usr/local/bin:/usr/bin:/bin";
 
 /// Files inside runtime roots that hold credentials: hidden behind an empty file.
 const SECRET_FILES: &[&str] = &[
@@ -43,95 +36,342 @@ const SECRET_FILES: &[&str] = &[
     ".netrc",
 ];
 
-/// The environment of a bot in the sandbox: the passed variables, and its scratch area as
-/// home and temporary directory.
-pub fn bot_env() -> Vec<(String, String)> {
-    let mut env: Vec<(String, String)> = PASSED_ENV
+/// One language runtime's installation, mounted read-only in every bot's view at its
+/// own path: an install prefix (a pyenv version, a venv, a Node prefix, a rustup
+/// toolchain, a JDK, a Go root), never a home folder or a folder holding dotfiles.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Runtime {
+    /// The install prefix (canonical).
+    pub prefix: PathBuf,
+    /// Why it is in the view, for `mazearena doctor`.
+    pub why: String,
+}
+
+/// The environment of a bot in the sandbox, all of the runner's making: a `PATH` of its
+/// runtimes' `bin` folders and the system's, its scratch area as home and temporary
+/// directory, and the passed variables. The owner's declared variables are not here:
+/// the jail step adds them at the bot's own `exec`.
+pub fn bot_env(runtimes: &[Runtime]) -> Vec<(String, String)> {
+    let mut path: Vec<String> = runtimes
         .iter()
-        .filter_map(|k| std::env::var(k).ok().map(|v| (k.to_string(), v)))
+        .map(|r| r.prefix.join("bin"))
+        .filter(|b| b.is_dir())
+        .map(|b| b.to_string_lossy().into_owned())
         .collect();
+    path.dedup();
+    path.push(SYSTEM_PATH.into());
+    let mut env: Vec<(String, String)> = vec![("PATH".into(), path.join(":"))];
+    env.extend(
+        PASSED_ENV
+            .iter()
+            .filter_map(|k| std::env::var(k).ok().map(|v| (k.to_string(), v))),
+    );
     let tmp = format!("{SCRATCH}/tmp");
     env.push(("HOME".into(), tmp.clone()));
     env.push(("TMPDIR".into(), tmp));
     env.push(("PYTHONUNBUFFERED".into(), "1".into()));
     env.push(("PYTHONDONTWRITEBYTECODE".into(), "1".into()));
-    // rustup's proxies look for their toolchains under $HOME, which is the scratch area
-    // here: point them at the ones mounted from ours.
-    if std::env::var_os("RUSTUP_HOME").is_none()
-        && let Some(rustup) = default_rustup_home()
-    {
-        env.push(("RUSTUP_HOME".into(), rustup.to_string_lossy().into_owned()));
-    }
     env
-}
-
-/// `~/.rustup` when rustup's proxies in `~/.cargo/bin` are on PATH (and it exists).
-fn default_rustup_home() -> Option<PathBuf> {
-    let home = PathBuf::from(std::env::var_os("HOME")?);
-    let cargo_bin = home.join(".cargo").join("bin");
-    let on_path = std::env::split_paths(&std::env::var_os("PATH")?).any(|d| d == cargo_bin);
-    let rustup = home.join(".rustup");
-    (on_path && rustup.is_dir()).then_some(rustup)
 }
 
 fn is_system(path: &Path) -> bool {
     path.starts_with("/usr") || SYSTEM_DIRS.iter().any(|d| path.starts_with(d))
 }
 
-/// Install roots of the language runtimes on PATH that live outside the system folders
-/// (a pyenv root, a Node prefix, cargo and rustup homes), never one that contains or
-/// lies inside a path of `hide`.
-pub fn runtime_roots(hide: &[PathBuf]) -> Vec<PathBuf> {
-    let mut roots: Vec<PathBuf> = Vec::new();
-    let mut add = |p: PathBuf| {
-        if p.is_dir() && !is_system(&p) && p != Path::new("/") && !roots.contains(&p) {
-            roots.push(p);
-        }
-    };
-    for key in ["PYENV_ROOT", "RUSTUP_HOME", "CARGO_HOME"] {
-        if let Some(v) = std::env::var_os(key) {
-            add(PathBuf::from(v));
+/// Why `prefix` cannot be a runtime: `/`, a system or special folder, a home folder,
+/// a folder holding dotfiles, or a folder that holds or lies inside a path of `hide`.
+fn unfit(prefix: &Path, hide: &[PathBuf]) -> Option<String> {
+    let shown = prefix.display();
+    if prefix == Path::new("/") || !prefix.is_absolute() {
+        return Some(format!("{shown} is not an install folder"));
+    }
+    if is_system(prefix) {
+        return Some(format!("{shown} is a system folder (already in the view)"));
+    }
+    for special in [
+        "/proc", "/sys", "/dev", "/etc", "/run", "/boot", "/var", "/home",
+    ] {
+        if prefix == Path::new(special) {
+            return Some(format!("{shown} is a system folder"));
         }
     }
-    // rustup's proxies in ~/.cargo/bin need the toolchains in ~/.rustup.
-    if let Some(rustup) = default_rustup_home() {
-        add(rustup);
+    let homes = [
+        std::env::var_os("HOME").map(PathBuf::from),
+        Some("/root".into()),
+    ];
+    let is_home =
+        homes.iter().flatten().any(|h| h == prefix) || prefix.parent() == Some(Path::new("/home"));
+    if is_home {
+        return Some(format!("{shown} is a home folder"));
     }
-    if let Some(path) = std::env::var_os("PATH") {
-        for dir in std::env::split_paths(&path) {
-            if !dir.is_absolute() || is_system(&dir) || !dir.is_dir() {
-                continue;
+    match std::fs::read_dir(prefix) {
+        Err(e) => return Some(format!("{shown}: {e}")),
+        Ok(entries) => {
+            if let Some(dot) = entries
+                .flatten()
+                .map(|e| e.file_name())
+                .filter(|n| n != ".gitignore")
+                .find(|n| n.as_encoded_bytes().starts_with(b"."))
+            {
+                return Some(format!(
+                    "{shown} holds a dotfile ({}): a runtime is an install folder, not a \
+                     folder of a user's files",
+                    dot.to_string_lossy()
+                ));
             }
-            let dir = dir.canonicalize().unwrap_or(dir);
-            let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            let root = if matches!(name, "bin" | "shims") {
-                dir.parent().map_or(dir.clone(), Path::to_path_buf)
-            } else {
-                dir.clone()
-            };
-            add(root);
         }
     }
-    let canon = |p: &PathBuf| p.canonicalize().unwrap_or_else(|_| p.clone());
-    let hide: Vec<PathBuf> = hide.iter().map(canon).collect();
-    roots.retain(|r| {
-        let r = canon(r);
-        !hide.iter().any(|h| h.starts_with(&r) || r.starts_with(h))
-    });
-    roots.sort();
-    // A root inside another is mounted with it.
-    let all = roots.clone();
-    roots.retain(|r| !all.iter().any(|o| o != r && r.starts_with(o)));
-    roots
+    if let Some(h) = hide
+        .iter()
+        .find(|h| h.starts_with(prefix) || prefix.starts_with(h))
+    {
+        return Some(format!(
+            "{shown} holds or lies in {}, which bots must never see",
+            h.display()
+        ));
+    }
+    None
+}
+
+/// The runtime of install prefix `dir` (with a venv's base interpreter), checked.
+///
+/// # Errors
+/// Why `dir` cannot be a runtime.
+pub fn runtime(dir: &Path, why: &str, hide: &[PathBuf]) -> Result<Vec<Runtime>, String> {
+    let prefix = dir
+        .canonicalize()
+        .map_err(|e| format!("the runtime {}: {e}", dir.display()))?;
+    if !prefix.is_dir() {
+        return Err(format!("the runtime {} is not a folder", dir.display()));
+    }
+    let hide: Vec<PathBuf> = hide
+        .iter()
+        .map(|h| h.canonicalize().unwrap_or_else(|_| h.clone()))
+        .collect();
+    if let Some(reason) = unfit(&prefix, &hide) {
+        return Err(format!(
+            "cannot use {} as a runtime: {reason}",
+            dir.display()
+        ));
+    }
+    let mut out = vec![Runtime {
+        prefix: prefix.clone(),
+        why: why.to_string(),
+    }];
+    // A venv runs its base interpreter: `home = /x/bin` in its pyvenv.cfg.
+    if let Ok(cfg) = std::fs::read_to_string(prefix.join("pyvenv.cfg")) {
+        let home = cfg.lines().find_map(|l| {
+            let (k, v) = l.split_once('=')?;
+            (k.trim() == "home").then(|| PathBuf::from(v.trim()))
+        });
+        if let Some(bin) = home.and_then(|h| h.canonicalize().ok()) {
+            let base = if bin.ends_with("bin") {
+                bin.parent().map_or(bin.clone(), Path::to_path_buf)
+            } else {
+                bin
+            };
+            if !is_system(&base) {
+                if let Some(reason) = unfit(&base, &hide) {
+                    return Err(format!(
+                        "cannot use the base interpreter of the venv {}: {reason}",
+                        dir.display()
+                    ));
+                }
+                out.push(Runtime {
+                    prefix: base,
+                    why: format!("base interpreter of the venv {}", prefix.display()),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The operator's runtime list, checked (`--runtime DIR`, `MAZEARENA_RUNTIMES`).
+///
+/// # Errors
+/// The first listed folder that cannot be a runtime, and why.
+pub fn listed_runtimes(listed: &[PathBuf], hide: &[PathBuf]) -> Result<Vec<Runtime>, String> {
+    let mut out: Vec<Runtime> = Vec::new();
+    for dir in listed {
+        for r in runtime(dir, "listed by the operator (--runtime)", hide)? {
+            if !out.iter().any(|o| o.prefix == r.prefix) {
+                out.push(r);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The runtime a bot's (or build's) `program` comes from, for local runs (`run`,
+/// `tournament`): an absolute path to an interpreter outside the bot's folder and the
+/// system (`/srv/venvs/sci/bin/python`), or a bare name found on the runner's `PATH`
+/// outside the system (through a pyenv shim or a rustup proxy to the real program). The
+/// runtime is the folder holding the program's `bin` folder; nothing when the program is
+/// in the system, in the bot's folder, or not found. Never used by a server: there only
+/// the operator's list counts.
+///
+/// # Errors
+/// The program's folder cannot be a runtime, and why.
+pub fn runtime_of_program(
+    program: &str,
+    bot_dir: &Path,
+    hide: &[PathBuf],
+) -> Result<Vec<Runtime>, String> {
+    let path = Path::new(program);
+    let found: Option<PathBuf> = if path.is_absolute() {
+        let bot_dir = bot_dir.canonicalize().unwrap_or_else(|_| bot_dir.into());
+        path.is_file()
+            .then(|| path.to_path_buf())
+            .filter(|p| !p.starts_with(&bot_dir))
+    } else if program.contains('/') {
+        None
+    } else {
+        std::env::var_os("PATH").and_then(|p| {
+            std::env::split_paths(&p)
+                .filter(|d| d.is_absolute())
+                .map(|d| d.join(program))
+                .find(|c| c.is_file())
+        })
+    };
+    let Some(found) = found else {
+        return Ok(Vec::new());
+    };
+    let found = real_program(&found, program);
+    let Some(bin) = found.parent() else {
+        return Ok(Vec::new());
+    };
+    if is_system(bin) {
+        return Ok(Vec::new());
+    }
+    let prefix = if bin.ends_with("bin") {
+        bin.parent().unwrap_or(bin)
+    } else {
+        bin
+    };
+    runtime(
+        prefix,
+        &format!("the install folder of the bot's program {program}"),
+        hide,
+    )
+}
+
+/// Past a pyenv shim or a rustup proxy, the program that it runs: `pyenv which` and
+/// `rustup which` (the runner's own tools, asked about a file that is on its `PATH`).
+fn real_program(found: &Path, name: &str) -> PathBuf {
+    let dir = found.parent().unwrap_or(Path::new("/"));
+    let manager = if dir.ends_with("shims") {
+        dir.parent().map(|root| root.join("bin/pyenv"))
+    } else {
+        Some(dir.join("rustup")).filter(|r| r.is_file())
+    };
+    let Some(manager) = manager.filter(|m| m.is_file()) else {
+        return found.to_path_buf();
+    };
+    std::process::Command::new(&manager)
+        .args(["which", name])
+        .stdin(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()))
+        .filter(|p| p.is_file())
+        .unwrap_or_else(|| found.to_path_buf())
+}
+
+/// Where runtime `prefix` appears inside the view: at its own path, except under `/tmp`,
+/// which is a link to the scratch area's `tmp` (the runtime is mounted there, so its own
+/// path still leads to it).
+fn mount_point(prefix: &Path) -> PathBuf {
+    match prefix.strip_prefix("/tmp") {
+        Ok(rel) => Path::new(SCRATCH).join("tmp").join(rel),
+        Err(_) => prefix.to_path_buf(),
+    }
+}
+
+/// Every mount of a bot's view and why it is there, for `mazearena doctor`.
+pub fn describe(runtimes: &[Runtime]) -> Vec<(String, String)> {
+    let mut out = vec![(
+        "/usr".to_string(),
+        "system programs and libraries, read-only".to_string(),
+    )];
+    for dir in SYSTEM_DIRS {
+        let p = Path::new(dir);
+        match std::fs::read_link(p) {
+            Ok(target) => out.push((dir.to_string(), format!("link to {}", target.display()))),
+            Err(_) if p.is_dir() => out.push((dir.to_string(), "system folder, read-only".into())),
+            Err(_) => {}
+        }
+    }
+    for f in ETC_FILES {
+        if Path::new(f).exists() {
+            out.push((
+                f.to_string(),
+                "what a runtime needs of /etc, read-only".into(),
+            ));
+        }
+    }
+    for r in runtimes {
+        let at = mount_point(&r.prefix);
+        let place = if at == r.prefix {
+            String::new()
+        } else {
+            format!(" (mounted at {})", at.display())
+        };
+        out.push((
+            r.prefix.display().to_string(),
+            format!("runtime, read-only: {}{place}", r.why),
+        ));
+    }
+    out.push((
+        "/proc".into(),
+        "the sandbox's own processes only (/proc/sys read-only)".into(),
+    ));
+    out.push((
+        "/dev".into(),
+        "null, zero, random, urandom, tty: a minimal /dev".into(),
+    ));
+    out.push((
+        SCRATCH.into(),
+        "scratch tmpfs of the match's size: tmp/ and work/".into(),
+    ));
+    out.push((
+        format!("{SCRATCH}/work"),
+        "the bot's own files, read-only, as its working directory".into(),
+    ));
+    out.push(("/tmp".into(), format!("link to {SCRATCH}/tmp")));
+    out.push((
+        HELPER_IN_SANDBOX.into(),
+        "the jail step (mazearena sandbox-exec), read-only".into(),
+    ));
+    out
+}
+
+/// What a sandbox is for, which decides its working directory and its identity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Work {
+    /// A match: the bot's files read-only in a writable scratch working directory; as
+    /// root, the jail drops to the match's own uid.
+    Match,
+    /// A build: its folder is the working directory, writable. With `own_uid` (as root,
+    /// in an area of its own) the jail drops to the build's own uid; otherwise it runs as
+    /// the runner's user in a user namespace (as root: a root without capabilities).
+    Build {
+        /// The build runs as a uid of its own.
+        own_uid: bool,
+    },
 }
 
 /// The bubblewrap arguments for one bot, up to and including the helper's path: the
 /// caller appends `sandbox-exec` and the jail's arguments. For a match, `bot_dir`'s
 /// top-level entries are mounted read-only in the working directory (`/sandbox/work`),
 /// which is otherwise writable scratch of `scratch_bytes` shared with `/tmp`. For a
-/// build (`writable`), the folder itself is the working directory, writable, so that
-/// what the build makes stays; as root, a build then runs as a root without any
-/// capability in a user namespace of its own (it must write files the server owns).
+/// build ([`Work::Build`]), the folder itself is the working directory, writable, so
+/// that what the build makes stays, and `/tmp` apart holds `scratch_bytes`.
+/// `runtimes` are mounted read-only and their `bin` folders lead the bot's `PATH`. The
+/// environment is the runner's alone ([`bot_env`]): nothing of the owner's acts on
+/// bubblewrap or the jail step.
 ///
 /// # Errors
 /// The bot folder cannot be listed.
@@ -139,14 +379,16 @@ pub fn bwrap_args(
     full: &FullSandbox,
     bot_dir: Option<&Path>,
     scratch_bytes: u64,
-    writable: bool,
-    extra_env: &[(String, String)],
+    work_kind: Work,
+    runtimes: &[Runtime],
 ) -> std::io::Result<Vec<OsString>> {
+    let writable = matches!(work_kind, Work::Build { .. });
+    let own_uid = full.as_root && matches!(work_kind, Work::Match | Work::Build { own_uid: true });
     let mut a: Vec<OsString> = Vec::new();
     let mut push = |items: &[&dyn AsRef<std::ffi::OsStr>]| {
         a.extend(items.iter().map(|i| i.as_ref().to_os_string()));
     };
-    if full.as_root && !writable {
+    if own_uid {
         // Root makes the namespaces itself; the jail then drops to the match's uid.
         push(&[
             &"--unshare-ipc",
@@ -187,22 +429,38 @@ pub fn bwrap_args(
     for f in ETC_FILES {
         push(&[&"--ro-bind-try", f, f]);
     }
-    for root in &full.runtime_roots {
-        push(&[&"--ro-bind", root, root]);
-        for secret in SECRET_FILES {
-            let f = root.join(secret);
-            if f.is_file() {
-                push(&[&"--ro-bind", &"/dev/null", &f]);
-            }
-        }
-    }
-    push(&[&"--proc", &"/proc", &"--dev", &"/dev"]);
+    // /proc/sys read-only, whoever the bot runs as: a second wall beside the uid drop
+    // (a root without capabilities in a user namespace could otherwise write some of it).
+    push(&[
+        &"--proc",
+        &"/proc",
+        &"--ro-bind",
+        &"/proc/sys",
+        &"/proc/sys",
+    ]);
+    push(&[
+        &"--ro-bind-try",
+        &"/proc/sysrq-trigger",
+        &"/proc/sysrq-trigger",
+    ]);
+    push(&[&"--dev", &"/dev"]);
     let size = scratch_bytes.to_string();
     let work = format!("{SCRATCH}/work");
     let tmp = format!("{SCRATCH}/tmp");
     push(&[
         &"--size", &size, &"--tmpfs", &SCRATCH, &"--dir", &tmp, &"--dir", &work,
     ]);
+    // After the scratch area: a runtime under /tmp is mounted in its tmp folder.
+    for r in runtimes {
+        let at = mount_point(&r.prefix);
+        push(&[&"--ro-bind", &r.prefix, &at]);
+        for secret in SECRET_FILES {
+            let f = r.prefix.join(secret);
+            if f.is_file() {
+                push(&[&"--ro-bind", &"/dev/null", &at.join(secret)]);
+            }
+        }
+    }
     if let (Some(dir), true) = (bot_dir, writable) {
         push(&[&"--bind", &dir, &work]);
     } else if let Some(dir) = bot_dir {
@@ -216,8 +474,11 @@ pub fn bwrap_args(
             push(&[&"--ro-bind", &dir.join(&name), &dest]);
         }
     }
-    if full.as_root && !writable {
-        push(&[&"--chmod", &"1777", &tmp, &"--chmod", &"0777", &work]);
+    if own_uid {
+        push(&[&"--chmod", &"1777", &tmp]);
+        if !writable {
+            push(&[&"--chmod", &"0777", &work]);
+        }
     }
     push(&[&"--symlink", &tmp, &"/tmp"]);
     push(&[&"--ro-bind", &full.helper, &HELPER_IN_SANDBOX]);
@@ -227,7 +488,7 @@ pub fn bwrap_args(
     let dests = ETC_FILES
         .iter()
         .map(PathBuf::from)
-        .chain(full.runtime_roots.iter().cloned())
+        .chain(runtimes.iter().map(|r| mount_point(&r.prefix)))
         .chain([PathBuf::from(HELPER_IN_SANDBOX)]);
     for dest in dests {
         for a in dest.ancestors().skip(1) {
@@ -236,15 +497,17 @@ pub fn bwrap_args(
             }
         }
     }
-    parents.retain(|p| !full.runtime_roots.iter().any(|r| p.starts_with(r)));
+    // The scratch area's folders have their own modes; a runtime's own are kept.
+    parents
+        .retain(|p| !p.starts_with(SCRATCH) && !runtimes.iter().any(|r| p.starts_with(&r.prefix)));
     for p in &parents {
         if p.exists() || p.starts_with("/run") {
             push(&[&"--chmod", &"0755", p]);
         }
     }
     push(&[&"--clearenv"]);
-    for (k, v) in full.env.iter().chain(extra_env) {
-        push(&[&"--setenv", k, v]);
+    for (k, v) in bot_env(runtimes) {
+        push(&[&"--setenv", &k, &v]);
     }
     push(&[&"--chdir", &work, &"--", &HELPER_IN_SANDBOX]);
     Ok(a)
@@ -255,18 +518,77 @@ mod tests {
     use super::*;
 
     #[test]
-    fn hidden_paths_are_never_under_a_runtime_root() {
+    fn home_folders_dotfile_folders_and_hidden_paths_are_never_runtimes() {
         let tmp = tempfile::tempdir().unwrap();
-        let tools = tmp.path().join("tools/bin");
-        std::fs::create_dir_all(&tools).unwrap();
-        // SAFETY (test): single-threaded use of the environment in this test binary is
-        // not guaranteed, so only read what was set; the function reads PATH itself.
-        let roots = runtime_roots(&[tmp.path().join("tools/data.db")]);
+        let home_like = tmp.path().join("me");
+        std::fs::create_dir_all(home_like.join(".ssh")).unwrap();
+        let err = runtime(&home_like, "t", &[]).unwrap_err();
+        assert!(err.contains("dotfile (.ssh)"), "{err}");
+        let prefix = tmp.path().join("venv");
+        std::fs::create_dir_all(prefix.join("bin")).unwrap();
+        let db = prefix.join("data.db");
+        let err = runtime(&prefix, "t", &[db]).unwrap_err();
+        assert!(err.contains("bots must never see"), "{err}");
+        assert!(runtime(Path::new("/root"), "t", &[]).is_err());
+        assert!(runtime(Path::new("/usr"), "t", &[]).is_err());
+        assert!(runtime(Path::new("/"), "t", &[]).is_err());
+        let ok = runtime(&prefix, "t", &[]).unwrap();
+        assert_eq!(ok[0].prefix, prefix.canonicalize().unwrap());
+    }
+
+    #[test]
+    fn a_venv_brings_its_base_interpreter_and_leads_the_path() {
+        let tmp = tempfile::tempdir().unwrap();
+        let base = tmp.path().join("py/3.12");
+        std::fs::create_dir_all(base.join("bin")).unwrap();
+        let venv = tmp.path().join("venv");
+        std::fs::create_dir_all(venv.join("bin")).unwrap();
+        std::fs::write(
+            venv.join("pyvenv.cfg"),
+            format!(
+                "home = {}\ninclude-system-site-packages = false\n",
+                base.join("bin").display()
+            ),
+        )
+        .unwrap();
+        let rts = runtime(&venv, "t", &[]).unwrap();
+        assert_eq!(rts.len(), 2);
+        assert_eq!(rts[1].prefix, base.canonicalize().unwrap());
+        let env = bot_env(&rts);
+        let path = &env.iter().find(|(k, _)| k == "PATH").unwrap().1;
+        let venv_bin = venv.canonicalize().unwrap().join("bin");
+        assert!(path.starts_with(&*venv_bin.to_string_lossy()), "{path}");
+        assert!(path.ends_with(SYSTEM_PATH), "{path}");
+    }
+
+    #[test]
+    fn a_program_in_the_system_or_the_bot_folder_brings_no_runtime() {
+        let tmp = tempfile::tempdir().unwrap();
         assert!(
-            roots
-                .iter()
-                .all(|r| !tmp.path().join("tools/data.db").starts_with(r))
+            runtime_of_program("/usr/bin/python3", tmp.path(), &[])
+                .unwrap()
+                .is_empty()
         );
-        assert!(roots.iter().all(|r| !is_system(r)));
+        std::fs::write(tmp.path().join("bot"), "").unwrap();
+        let inside = tmp.path().join("bot").display().to_string();
+        assert!(
+            runtime_of_program(&inside, tmp.path(), &[])
+                .unwrap()
+                .is_empty()
+        );
+        assert!(
+            runtime_of_program("./bot", tmp.path(), &[])
+                .unwrap()
+                .is_empty()
+        );
+    }
+
+    #[test]
+    fn runtimes_under_tmp_are_mounted_in_the_scratch_tmp() {
+        assert_eq!(
+            mount_point(Path::new("/tmp/v/env")),
+            Path::new("/sandbox/tmp/v/env")
+        );
+        assert_eq!(mount_point(Path::new("/opt/node")), Path::new("/opt/node"));
     }
 }
