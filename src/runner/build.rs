@@ -26,6 +26,8 @@ const FULL_MARGIN_BYTES: u64 = 64 * 1024;
 pub struct BuildArea {
     /// The temporary folder holding the area (removed when dropped); `None` in place.
     _holder: Option<tempfile::TempDir>,
+    /// What is bounded: the tmpfs (or watched folder) holding `work`.
+    area: PathBuf,
     /// The build's working folder.
     work: PathBuf,
     /// True when `work` is a tmpfs of ours (unmounted when dropped).
@@ -47,15 +49,17 @@ impl BuildArea {
         let holder = tempfile::Builder::new()
             .prefix("build-")
             .tempdir_in(parent)?;
-        let work = holder.path().join("work");
-        std::fs::create_dir(&work)?;
+        // The tmpfs (or folder) holds the working folder, so that files can be put in
+        // place by a rename from beside it.
+        let area = holder.path().join("area");
+        std::fs::create_dir(&area)?;
         let root = nix::unistd::geteuid().is_root();
         let mut mounted = false;
         if root {
             use nix::mount::{MsFlags, mount};
             match mount(
                 Some("tmpfs"),
-                &work,
+                &area,
                 Some("tmpfs"),
                 MsFlags::MS_NOSUID | MsFlags::MS_NODEV,
                 Some(format!("size={limit},mode=0700").as_str()),
@@ -67,8 +71,11 @@ impl BuildArea {
                 ),
             }
         }
+        let work = area.join("work");
+        std::fs::create_dir(&work)?;
         Ok(BuildArea {
             _holder: Some(holder),
+            area,
             work,
             mounted,
             limit,
@@ -81,6 +88,7 @@ impl BuildArea {
     pub fn in_place(dir: &Path, limit: u64) -> BuildArea {
         BuildArea {
             _holder: None,
+            area: dir.to_path_buf(),
             work: dir.to_path_buf(),
             mounted: false,
             limit,
@@ -102,18 +110,17 @@ impl BuildArea {
     /// a watched one: more than its bound in blocks on the disk).
     fn filled(&self) -> bool {
         if self.mounted {
-            return nix::sys::statvfs::statvfs(&self.work).is_ok_and(|s| {
-                s.blocks_available() * s.fragment_size() < FULL_MARGIN_BYTES
-            });
+            return nix::sys::statvfs::statvfs(&self.area)
+                .is_ok_and(|s| s.blocks_available() * s.fragment_size() < FULL_MARGIN_BYTES);
         }
-        disk_usage(&self.work) > self.limit
+        disk_usage(&self.area) > self.limit
     }
 }
 
 impl Drop for BuildArea {
     fn drop(&mut self) {
         if self.mounted {
-            let _ = nix::mount::umount2(&self.work, nix::mount::MntFlags::MNT_DETACH);
+            let _ = nix::mount::umount2(&self.area, nix::mount::MntFlags::MNT_DETACH);
         }
     }
 }

@@ -5,6 +5,7 @@ mod authors;
 mod bots;
 mod browser;
 mod cli;
+mod contain;
 mod faults;
 mod hostile;
 mod mazefiles;

@@ -427,7 +427,9 @@ async fn uploaded_sources_are_built_once_in_the_sandbox_before_they_play() {
 async fn the_rust_kit_uploaded_as_source_builds_with_cargo_and_plays() {
     // As bots/rust/README.md shows: the sources, `cargo build --release --offline`.
     let dir = tempfile::tempdir().unwrap();
-    let server = TestServer::start(dir.path(), &[]);
+    // The toolchain is one of the server's runtimes, as bots/rust/README.md says.
+    let toolchain = crate::support::rust_toolchain();
+    let server = TestServer::start(dir.path(), &["--runtime", toolchain.to_str().unwrap()]);
     let kit = root().join("bots/rust");
     let mut files = serde_json::Map::new();
     for f in ["Cargo.toml", "Cargo.lock"] {

@@ -189,6 +189,11 @@ fn as_installed(command: &mut Command) {
 impl TestServer {
     /// Starts the server binary in `dir` (database and bot files inside it).
     pub fn start(dir: &Path, extra: &[&str]) -> TestServer {
+        TestServer::start_env(dir, extra, &[])
+    }
+
+    /// [`TestServer::start`] with variables `env` set for the server.
+    pub fn start_env(dir: &Path, extra: &[&str], env: &[(&str, &str)]) -> TestServer {
         use std::io::BufRead;
         let database = format!("sqlite://{}", dir.join("mazearena.db").display());
         let mut command = Command::new(env!("CARGO_BIN_EXE_mazearena"));
@@ -201,6 +206,7 @@ impl TestServer {
             .args(extra)
             .env("MAZEARENA_ADMIN_TOKEN", ADMIN)
             .env("MAZEARENA_SANDBOX", sandbox().level())
+            .envs(env.iter().copied())
             .current_dir(root())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::null())
@@ -421,4 +427,22 @@ pub async fn assert_standings_equal_recount(database: &str, tournaments: &[i64])
         }
     }
     storage.close().await;
+}
+
+/// The install folder of the Rust toolchain that builds this project (`rustup which
+/// cargo` without `/bin/cargo`, else the folder of `cargo` on PATH): a runtime to list.
+pub fn rust_toolchain() -> PathBuf {
+    let cargo = Command::new("rustup")
+        .args(["which", "cargo"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()))
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO")));
+    let cargo = cargo.canonicalize().unwrap_or(cargo);
+    cargo
+        .parent()
+        .and_then(Path::parent)
+        .expect("cargo is in a bin folder")
+        .to_path_buf()
 }

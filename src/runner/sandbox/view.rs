@@ -498,10 +498,14 @@ pub fn bwrap_args(
         }
     }
     // The scratch area's folders have their own modes; a runtime's own are kept.
-    parents
-        .retain(|p| !p.starts_with(SCRATCH) && !runtimes.iter().any(|r| p.starts_with(&r.prefix)));
+    // The scratch area's own folders have their modes already (tmp is 1777).
+    let scratch_dirs = [SCRATCH.to_string(), tmp.clone(), work.clone()];
+    parents.retain(|p| {
+        !scratch_dirs.iter().any(|d| p == Path::new(d))
+            && !runtimes.iter().any(|r| p.starts_with(&r.prefix))
+    });
     for p in &parents {
-        if p.exists() || p.starts_with("/run") {
+        if p.exists() || p.starts_with("/run") || p.starts_with(SCRATCH) {
             push(&[&"--chmod", &"0755", p]);
         }
     }
