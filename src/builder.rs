@@ -200,3 +200,61 @@ impl Builder {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::storage::bots::NewVersion;
+
+    #[tokio::test]
+    async fn a_build_that_kept_outliving_its_worker_is_failed_not_run_again() {
+        for (db, _guard) in crate::storage::test_support::backends().await {
+            let v = db
+                .create_bot(
+                    "b",
+                    "h",
+                    &NewVersion {
+                        command: "./bot",
+                        dir: "",
+                        files_sha256: "s",
+                        file_count: 1,
+                        build_command: Some("make"),
+                        env: &[],
+                        bundle_sha256: None,
+                    },
+                )
+                .await
+                .unwrap();
+            let scratch = tempfile::tempdir().unwrap();
+            let builder = Builder {
+                storage: db.clone(),
+                sandbox: Sandbox::None,
+                scratch: scratch.path().to_path_buf(),
+                write_limit: 1 << 20,
+                owner: "w".into(),
+                lease: Duration::from_secs(60),
+            };
+            // Each claim's worker dies: its lease runs out and the build is claimed again.
+            let mut row = None;
+            for _ in 0..=MAX_BUILD_ATTEMPTS {
+                row = db.claim_build("w", -1).await.unwrap();
+            }
+            let row = row.unwrap();
+            assert_eq!(row.bot_version_id, v.bot_version_id);
+            assert_eq!(row.build_attempts, MAX_BUILD_ATTEMPTS + 1);
+            let Ended::Done { built, log } = builder.build(&row).await else {
+                panic!("the build was dropped again");
+            };
+            assert_eq!(built, None);
+            assert!(log.contains("(3 attempts)"), "{log}");
+            // Before its attempts ran out, the same version is built (and, with its
+            // files missing, fails for that reason instead).
+            let mut fresh = row.clone();
+            fresh.build_attempts = MAX_BUILD_ATTEMPTS;
+            let Ended::Done { log, .. } = builder.build(&fresh).await else {
+                panic!("dropped");
+            };
+            assert!(log.contains("upload it again"), "{log}");
+        }
+    }
+}

@@ -97,7 +97,13 @@ pub struct FullSandbox {
     pub detect: bool,
     /// Paths no runtime may hold (data folder, database).
     pub hide: Vec<PathBuf>,
+    /// The runtimes found so far by program and bot folder (with `detect`).
+    detected: DetectedRuntimes,
 }
+
+/// Runtimes found from bots' programs, by program and bot folder.
+type DetectedRuntimes =
+    std::sync::Mutex<std::collections::HashMap<(String, PathBuf), Vec<Runtime>>>;
 
 /// What the full sandbox is set up with.
 #[derive(Debug, Clone, Default)]
@@ -203,6 +209,7 @@ impl Sandbox {
             runtimes: view::listed_runtimes(&setup.runtimes, &setup.hide).map_err(Unavailable)?,
             detect: setup.detect,
             hide: setup.hide.clone(),
+            detected: DetectedRuntimes::default(),
         };
         let sandbox = Sandbox::Full(Arc::new(full));
         let status = sandbox.self_test()?;
@@ -404,7 +411,18 @@ impl FullSandbox {
     pub fn runtimes_for(&self, program: &str, bot_dir: &Path) -> Result<Vec<Runtime>, String> {
         let mut all = self.runtimes.clone();
         if self.detect {
-            for r in runtime_of_program(program, bot_dir, &self.hide)? {
+            // Found once per program and folder: a tournament plays one bot many times.
+            let key = (program.to_string(), bot_dir.to_path_buf());
+            let mut found = self.detected.lock().unwrap_or_else(|p| p.into_inner());
+            let own = match found.get(&key) {
+                Some(known) => known.clone(),
+                None => {
+                    let own = runtime_of_program(program, bot_dir, &self.hide)?;
+                    found.insert(key, own.clone());
+                    own
+                }
+            };
+            for r in own {
                 if !all.iter().any(|o| o.prefix == r.prefix) {
                     all.push(r);
                 }
