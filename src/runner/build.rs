@@ -46,8 +46,9 @@ impl BuildArea {
     /// # Errors
     /// The folder cannot be made.
     pub fn new(parent: &Path, limit: u64) -> std::io::Result<BuildArea> {
+        remove_stale(parent);
         let holder = tempfile::Builder::new()
-            .prefix("build-")
+            .prefix(&format!("build-{}-", std::process::id()))
             .tempdir_in(parent)?;
         // The tmpfs (or folder) holds the working folder, so that files can be put in
         // place by a rename from beside it.
@@ -121,6 +122,32 @@ impl Drop for BuildArea {
     fn drop(&mut self) {
         if self.mounted {
             let _ = nix::mount::umount2(&self.area, nix::mount::MntFlags::MNT_DETACH);
+        }
+    }
+}
+
+/// Removes the build areas under `parent` left by runner processes that are gone (a
+/// server killed while it built): their tmpfs is unmounted and their folder removed.
+fn remove_stale(parent: &Path) {
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = name
+            .strip_prefix("build-")
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists() {
+            continue;
+        }
+        let area = e.path().join("area");
+        let _ = nix::mount::umount2(&area, nix::mount::MntFlags::MNT_DETACH);
+        if let Err(err) = std::fs::remove_dir_all(e.path()) {
+            tracing::warn!(cause = %err, dir = %e.path().display(), "cannot remove a stale build folder");
         }
     }
 }
@@ -413,5 +440,51 @@ fn read_tail_blocking(mut reader: impl std::io::Read, cap: usize) -> String {
         )
     } else {
         text
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn areas_of_gone_processes_are_removed_and_live_ones_kept() {
+        let parent = tempfile::tempdir().unwrap();
+        let live = BuildArea::new(parent.path(), 1 << 20).unwrap();
+        std::fs::write(live.work().join("f"), "x").unwrap();
+        // pid 0 is never a process's: a runner that is gone.
+        let stale = parent.path().join("build-0-abc");
+        std::fs::create_dir_all(stale.join("area/work")).unwrap();
+        let other = parent.path().join("notes");
+        std::fs::create_dir(&other).unwrap();
+        let again = BuildArea::new(parent.path(), 1 << 20).unwrap();
+        assert!(!stale.exists());
+        assert!(live.work().join("f").exists() && other.exists());
+        let holders = || std::fs::read_dir(parent.path()).unwrap().count();
+        assert_eq!(holders(), 3);
+        drop((live, again));
+        assert_eq!(holders(), 1, "an area is removed when dropped");
+    }
+
+    #[test]
+    fn an_area_is_bounded() {
+        let parent = tempfile::tempdir().unwrap();
+        let area = BuildArea::new(parent.path(), 4 << 20).unwrap();
+        assert!(!area.filled());
+        let big = vec![7u8; 1 << 20];
+        let mut wrote = 0;
+        for i in 0..8 {
+            if std::fs::write(area.work().join(format!("f{i}")), &big).is_err() {
+                break;
+            }
+            wrote += 1;
+        }
+        assert!(area.filled(), "wrote {wrote} MiB into a 4 MiB area");
+        if area.mounted {
+            assert!(
+                wrote <= 4,
+                "a mounted area holds at most its bound: {wrote} MiB"
+            );
+        }
     }
 }
