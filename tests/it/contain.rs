@@ -323,8 +323,8 @@ fn numpy_venv(test: &str) -> Option<tempfile::TempDir> {
     Some(dir)
 }
 
-#[test]
-fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_runtime_list() {
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_runtime_list() {
     let Some(_) = full_sandbox("numpy venv") else {
         return;
     };
@@ -382,6 +382,30 @@ fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_runtime_
     if without["status"] != "finished" {
         assert!(stderr(&without).contains("numpy"), "{without}");
     }
+    // On a server, where the operator lists the venv: the same robot, uploaded, named
+    // by the venv's absolute path, plays to the same score.
+    let tmp = tempfile::tempdir().unwrap();
+    let server = TestServer::start(
+        tmp.path(),
+        &["--jobs", "1", "--runtime", venv.to_str().unwrap()],
+    );
+    let read = |f: &str| std::fs::read_to_string(root().join(f)).unwrap();
+    let (bot, token) = crate::support::register(
+        &server,
+        "numpy-robot",
+        &format!("{} udacity_adapter.py numpy_robot.py", python.display()),
+        json!({
+            "udacity_adapter.py": read("bots/python/udacity_adapter.py"),
+            "robot.py": read("tests/fixtures/robot_py/robot.py"),
+            "numpy_robot.py": read("tests/fixtures/robot_py/numpy_robot.py"),
+        }),
+    )
+    .await;
+    let id = queue_on_a_public_maze(&server, bot, &token).await;
+    let m = wait_match(&server, id).await;
+    assert_eq!(m["status"], "finished", "{m}");
+    let seeded = run_in(root(), &with_numpy, &["--seed", "1"], &[]);
+    assert_eq!(m["score"], seeded["score"], "{m}");
 }
 
 /// Uploads a bot whose build is `build`; returns the ended version's view, its build

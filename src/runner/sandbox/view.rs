@@ -193,7 +193,7 @@ pub fn runtime(dir: &Path, why: &str, hide: &[PathBuf]) -> Result<Vec<Runtime>, 
 /// The first listed folder that cannot be a runtime, and why.
 pub fn listed_runtimes(listed: &[PathBuf], hide: &[PathBuf]) -> Result<Vec<Runtime>, String> {
     let mut out: Vec<Runtime> = Vec::new();
-    for dir in listed {
+    for dir in listed.iter().filter(|d| !d.as_os_str().is_empty()) {
         for r in runtime(dir, "listed by the operator (--runtime)", hide)? {
             if !out.iter().any(|o| o.prefix == r.prefix) {
                 out.push(r);
