@@ -204,25 +204,12 @@ impl Builder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage::bots::NewVersion;
 
     #[tokio::test]
     async fn a_build_that_kept_outliving_its_worker_is_failed_not_run_again() {
         for (db, _guard) in crate::storage::test_support::backends().await {
             let v = db
-                .create_bot(
-                    "b",
-                    "h",
-                    &NewVersion {
-                        command: "./bot",
-                        dir: "",
-                        files_sha256: "s",
-                        file_count: 1,
-                        build_command: Some("make"),
-                        env: &[],
-                        bundle_sha256: None,
-                    },
-                )
+                .create_bot("b", "h", &crate::storage::test_support::with_build())
                 .await
                 .unwrap();
             let scratch = tempfile::tempdir().unwrap();

@@ -158,21 +158,8 @@ impl Storage {
 
 #[cfg(test)]
 mod tests {
-    use crate::storage::bots::{NewVersion, build_status};
-    use crate::storage::test_support::backends;
-
-    /// A version with a build command.
-    fn with_build() -> NewVersion<'static> {
-        NewVersion {
-            command: "./bot",
-            dir: "",
-            files_sha256: "s",
-            file_count: 1,
-            build_command: Some("make"),
-            env: &[],
-            bundle_sha256: None,
-        }
-    }
+    use crate::storage::bots::build_status;
+    use crate::storage::test_support::{backends, with_build};
 
     #[tokio::test]
     async fn versions_with_a_build_wait_for_it_and_a_failed_build_fails_their_matches() {

@@ -470,6 +470,20 @@ mod tests {
 #[cfg(test)]
 pub(crate) mod test_support {
     use super::Storage;
+    use super::bots::NewVersion;
+
+    /// A version with a build command (`make`), its files not stored.
+    pub fn with_build() -> NewVersion<'static> {
+        NewVersion {
+            command: "./bot",
+            dir: "",
+            files_sha256: "s",
+            file_count: 1,
+            build_command: Some("make"),
+            env: &[],
+            bundle_sha256: None,
+        }
+    }
 
     /// A fresh SQLite database in a temporary directory (kept alive by the guard).
     pub async fn fresh() -> (Storage, tempfile::TempDir) {

@@ -141,27 +141,20 @@ async fn a_server_applies_an_uploaded_bots_variables_only_to_the_bot() {
     let server = TestServer::start(tmp.path(), &["--jobs", "1"]);
     let db = tmp.path().join("mazearena.db").display().to_string();
     let read = |f: &str| std::fs::read_to_string(root().join(HOSTILE).join(f)).unwrap();
-    let (s, created) = server
-        .post(
-            "/api/bots",
-            json!({
-                "name": "preloader",
-                "command": "python3 report_uid.py",
-                // Built by the server's builder: the library is the owner's own file.
-                "build": "gcc -shared -fPIC -o evil.so preload.c",
-                "env": {"LD_PRELOAD": "/sandbox/work/evil.so", "HOSTILE_SECRET": db},
-                "files": {"report_uid.py": read("report_uid.py"),
-                          "_hostile.py": read("_hostile.py"),
-                          "preload.c": read("preload.c")},
-            }),
-            None,
-        )
-        .await;
-    assert_eq!(s, 201, "{created}");
-    let (bot, token) = (
-        created["bot_id"].as_i64().unwrap(),
-        created["owner_token"].as_str().unwrap().to_string(),
-    );
+    let (bot, token) = crate::support::upload(
+        &server,
+        json!({
+            "name": "preloader",
+            "command": "python3 report_uid.py",
+            // Built by the server's builder: the library is the owner's own file.
+            "build": "gcc -shared -fPIC -o evil.so preload.c",
+            "env": {"LD_PRELOAD": "/sandbox/work/evil.so", "HOSTILE_SECRET": db},
+            "files": {"report_uid.py": read("report_uid.py"),
+                      "_hostile.py": read("_hostile.py"),
+                      "preload.c": read("preload.c")},
+        }),
+    )
+    .await;
     let v = wait_built(&server, bot).await;
     assert_eq!(v["build_status"], "ready", "{v}");
     let id = queue_on_a_public_maze(&server, bot, &token).await;
@@ -418,30 +411,14 @@ async fn build_on_server(
     let mut args = vec!["--jobs", "1"];
     args.extend_from_slice(extra);
     let server = TestServer::start(tmp.path(), &args);
-    let (s, created) = server
-        .post(
-            "/api/bots",
-            json!({"name": "builder", "command": "python3 bot.py", "build": build,
-                   "files": {"bot.py": "print('x')\n"}}),
-            None,
-        )
-        .await;
-    assert_eq!(s, 201, "{created}");
-    let (bot, token) = (
-        created["bot_id"].as_i64().unwrap(),
-        created["owner_token"].as_str().unwrap().to_string(),
-    );
+    let (bot, token) = crate::support::upload(
+        &server,
+        json!({"name": "builder", "command": "python3 bot.py", "build": build,
+               "files": {"bot.py": "print('x')\n"}}),
+    )
+    .await;
     let v = wait_built(&server, bot).await;
-    let (_, log) = server
-        .get(
-            &format!("/api/bots/{bot}/versions/1/build-log"),
-            Some(&token),
-        )
-        .await;
-    let log = log["build_log"]
-        .as_str()
-        .map(str::to_string)
-        .unwrap_or_else(|| log.to_string());
+    let log = crate::support::build_log(&server, bot, &token).await;
     (v, log, server, tmp)
 }
 

@@ -448,26 +448,14 @@ async fn the_rust_kit_uploaded_as_source_builds_with_cargo_and_plays() {
             }
         }
     }
-    let (s, created) = server
-        .post(
-            "/api/bots",
-            json!({"name": "rust-bot", "command": "./target/release/champion",
-                   "build": "cargo build --release --offline", "files": files}),
-            None,
-        )
-        .await;
-    assert_eq!(s, 201, "{created}");
-    let (bot, token) = (
-        created["bot_id"].as_i64().unwrap(),
-        created["owner_token"].as_str().unwrap().to_string(),
-    );
+    let (bot, token) = crate::support::upload(
+        &server,
+        json!({"name": "rust-bot", "command": "./target/release/champion",
+               "build": "cargo build --release --offline", "files": files}),
+    )
+    .await;
     let v = wait_built(&server, bot).await;
-    let (_, log) = server
-        .get(
-            &format!("/api/bots/{bot}/versions/1/build-log"),
-            Some(&token),
-        )
-        .await;
+    let log = crate::support::build_log(&server, bot, &token).await;
     assert_eq!(v["build_status"], "ready", "{log}");
     let (s, q) = server
         .post(

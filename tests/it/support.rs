@@ -342,18 +342,36 @@ pub async fn register(
     command: &str,
     files: Value,
 ) -> (i64, String) {
-    let (s, v) = server
-        .post(
-            "/api/bots",
-            json!({"name": name, "command": command, "files": files}),
-            None,
-        )
-        .await;
+    upload(
+        server,
+        json!({"name": name, "command": command, "files": files}),
+    )
+    .await
+}
+
+/// Registers a bot with the whole upload `body` (`POST /api/bots`), which must be
+/// accepted; returns its id and owner token.
+pub async fn upload(server: &TestServer, body: Value) -> (i64, String) {
+    let (s, v) = server.post("/api/bots", body, None).await;
     assert_eq!(s, 201, "{v}");
     (
         v["bot_id"].as_i64().unwrap(),
         v["owner_token"].as_str().unwrap().to_string(),
     )
+}
+
+/// The whole build log of bot `bot`'s first version, read with its owner's `token`.
+pub async fn build_log(server: &TestServer, bot: i64, token: &str) -> String {
+    let (_, log) = server
+        .get(
+            &format!("/api/bots/{bot}/versions/1/build-log"),
+            Some(token),
+        )
+        .await;
+    log["build_log"]
+        .as_str()
+        .map(str::to_string)
+        .unwrap_or_else(|| log.to_string())
 }
 
 /// Waits (at most 120 s) until the build of bot `bot`'s latest version has ended;
