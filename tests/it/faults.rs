@@ -157,7 +157,19 @@ pub async fn new_database(url: &str, name: &str) -> String {
     use sqlx::Connection;
     sqlx::any::install_default_drivers();
     let name = format!("{name}_{}_{}", std::process::id(), free_port());
-    let mut admin = sqlx::AnyConnection::connect(url).await.unwrap();
+    // The fault test crashes and restarts this cluster while other tests run: wait
+    // for it as a server would (30 s).
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let mut admin = loop {
+        match sqlx::AnyConnection::connect(url).await {
+            Ok(c) => break c,
+            Err(e) if Instant::now() < deadline => {
+                eprintln!("PostgreSQL not reachable yet ({e}); trying again");
+                tokio::time::sleep(Duration::from_millis(250)).await;
+            }
+            Err(e) => panic!("cannot reach PostgreSQL at {url}: {e}"),
+        }
+    };
     sqlx::query(&format!("create database {name}"))
         .execute(&mut admin)
         .await
