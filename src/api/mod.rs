@@ -7,6 +7,7 @@
 
 pub mod auth;
 pub mod bots;
+pub mod connections;
 pub mod error;
 pub mod leaderboard;
 pub mod lists;
@@ -186,17 +187,16 @@ pub fn app(state: AppState) -> Router {
         .with_state(state)
 }
 
-/// Serves the API on `listener` until `shutdown` completes, then finishes the requests
-/// in flight.
+/// Serves the API on `listener` within `limits` ([`connections`]) until `shutdown`
+/// completes, then finishes the requests in flight.
 ///
 /// # Errors
 /// When the listener fails.
 pub async fn serve(
     listener: TcpListener,
     state: AppState,
+    limits: connections::ConnectionLimits,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
-    axum::serve(listener, app(state))
-        .with_graceful_shutdown(shutdown)
-        .await
+    connections::serve(listener, app(state), limits, shutdown).await
 }

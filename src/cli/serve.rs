@@ -58,6 +58,19 @@ pub struct ServeArgs {
     /// The most matches that may wait in the queue; more are refused with 429.
     #[arg(long, env = "MAZEARENA_MAX_QUEUE", default_value_t = 10_000)]
     max_queue: i64,
+    /// The most connections open at once; a client over it is closed at once.
+    #[arg(long, env = "MAZEARENA_MAX_CONNECTIONS", default_value_t = 4096,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    max_connections: u32,
+    /// The most connections open at once from one client address.
+    #[arg(long, env = "MAZEARENA_MAX_CONNECTIONS_PER_ADDRESS", default_value_t = 256,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    max_connections_per_address: u32,
+    /// Seconds a client may take to send a request's head (on a new connection, or on a
+    /// kept-alive one between requests); then the connection is closed.
+    #[arg(long, env = "MAZEARENA_HEAD_TIMEOUT_SECS", default_value_t = 10,
+          value_parser = clap::value_parser!(u64).range(1..=3600))]
+    head_timeout_secs: u64,
     #[command(flatten)]
     pool: PoolArgs,
     #[command(flatten)]
@@ -248,9 +261,17 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         stop.cancel();
     });
     let http_stop = shutdown.stop_claiming.clone();
-    api::serve(listener, state, async move { http_stop.cancelled().await })
-        .await
-        .context("the HTTP server failed")?;
+    let limits = api::connections::ConnectionLimits {
+        max_connections: args.max_connections as usize,
+        max_per_address: args.max_connections_per_address as usize,
+        head_timeout: Duration::from_secs(args.head_timeout_secs),
+    }
+    .fitted_to_descriptors();
+    api::serve(listener, state, limits, async move {
+        http_stop.cancelled().await
+    })
+    .await
+    .context("the HTTP server failed")?;
 
     finish(
         &storage,

@@ -1,0 +1,112 @@
+//! A server that keeps its connections: idle and slow clients are closed after the head
+//! timeout, one address cannot hold more than its cap, and `/healthz` and the match
+//! workers keep working while 1,000 idle connections are open.
+
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::time::{Duration, Instant};
+
+use serde_json::json;
+
+use crate::support::{TestServer, register, simple_bot_files, wait_match};
+
+/// A connection from `source` to the server that sent half a request line and waits.
+fn idle_from(server: &SocketAddr, source: &str) -> std::io::Result<TcpStream> {
+    let socket = socket2::Socket::new(socket2::Domain::IPV4, socket2::Type::STREAM, None)?;
+    socket.bind(&format!("{source}:0").parse::<SocketAddr>().unwrap().into())?;
+    socket.connect(&(*server).into())?;
+    let mut stream: TcpStream = socket.into();
+    stream.write_all(b"GET /healthz HT")?;
+    Ok(stream)
+}
+
+/// Whether the server has closed `stream` (a read gives end of file or an error) within
+/// `wait`.
+fn closed_within(stream: &mut TcpStream, wait: Duration) -> bool {
+    stream.set_read_timeout(Some(wait)).unwrap();
+    let mut buf = [0u8; 256];
+    match stream.read(&mut buf) {
+        Ok(0) => true,
+        // An answer (408 or 400) before closing counts as closed: read on to the end.
+        Ok(_) => {
+            let deadline = Instant::now() + wait;
+            while Instant::now() < deadline {
+                match stream.read(&mut buf) {
+                    Ok(0) | Err(_) => return true,
+                    Ok(_) => {}
+                }
+            }
+            false
+        }
+        Err(e) => !matches!(
+            e.kind(),
+            std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+        ),
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_thousand_idle_connections_neither_stop_healthz_nor_the_workers_and_are_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(
+        dir.path(),
+        &[
+            "--jobs",
+            "1",
+            "--head-timeout-secs",
+            "3",
+            "--max-connections-per-address",
+            "250",
+        ],
+    );
+    let addr: SocketAddr = server.base.trim_start_matches("http://").parse().unwrap();
+    // 1,000 idle connections from four other loopback addresses, 250 each (their cap).
+    let opened = Instant::now();
+    let mut idle = Vec::new();
+    for source in ["127.0.0.2", "127.0.0.3", "127.0.0.4", "127.0.0.5"] {
+        for _ in 0..250 {
+            idle.push(idle_from(&addr, source).unwrap());
+        }
+    }
+    // Everyone else is served meanwhile (connections are taken in order: once this is
+    // answered, the 1,000 are all open on the server's side), and the workers play.
+    let (status, health) = server.get("/healthz", None).await;
+    assert_eq!(status, 200, "{health}");
+    // One more from an address at its cap is closed at once, without an answer.
+    let mut over = idle_from(&addr, "127.0.0.2").unwrap();
+    assert!(closed_within(&mut over, Duration::from_secs(2)));
+    let (bot, token) = register(
+        &server,
+        "honest",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": 1, "seed": 1}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let m = wait_match(&server, q["match_id"].as_i64().unwrap()).await;
+    assert_eq!(m["status"], "finished", "{m}");
+    // Still open while within the head timeout (if the above was quick enough to tell).
+    if opened.elapsed() < Duration::from_secs(2) {
+        assert!(!closed_within(&mut idle[0], Duration::from_millis(100)));
+    }
+    // Past the head timeout every idle connection has been closed by the server.
+    tokio::time::sleep(Duration::from_secs(4).saturating_sub(opened.elapsed())).await;
+    let still_open = tokio::task::spawn_blocking(move || {
+        idle.iter_mut()
+            .map(|s| closed_within(s, Duration::from_millis(500)))
+            .filter(|closed| !closed)
+            .count()
+    })
+    .await
+    .unwrap();
+    assert_eq!(still_open, 0, "idle connections the server kept");
+    let (status, _) = server.get("/healthz", None).await;
+    assert_eq!(status, 200);
+}
