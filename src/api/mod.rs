@@ -183,8 +183,34 @@ pub fn app(state: AppState) -> Router {
             REQUEST_TIMEOUT,
         ))
         .layer(CatchPanicLayer::custom(system::panic_response))
+        .layer(axum::middleware::map_response(security_headers))
         .layer(TraceLayer::new_for_http())
         .with_state(state)
+}
+
+/// Adds the security headers ([`crate::web::policy`]) to every answer.
+async fn security_headers(mut response: axum::response::Response) -> axum::response::Response {
+    use axum::http::{HeaderName, HeaderValue};
+    static HEADERS: std::sync::OnceLock<Vec<(HeaderName, HeaderValue)>> =
+        std::sync::OnceLock::new();
+    let headers = HEADERS.get_or_init(|| {
+        crate::web::policy::headers()
+            .into_iter()
+            .map(|(name, value)| {
+                (
+                    HeaderName::from_static(name),
+                    HeaderValue::from_str(&value).expect("BUG: a security header is not ASCII"),
+                )
+            })
+            .collect()
+    });
+    for (name, value) in headers {
+        response
+            .headers_mut()
+            .entry(name.clone())
+            .or_insert_with(|| value.clone());
+    }
+    response
 }
 
 /// Serves the API on `listener` within `limits` ([`connections`]) until `shutdown`

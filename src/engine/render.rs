@@ -17,6 +17,14 @@ pub const CELL: u32 = 40;
 /// The margin around the grid, with room for the axis numbers.
 const MARGIN: u32 = 28;
 
+/// The styles of a drawn maze (the text of its `<style>` element).
+pub const SVG_STYLE: &str = "
+.wall { stroke: #1d2330; stroke-width: 5; stroke-linecap: round; }
+.post { fill: #1d2330; }
+.axis { font: 11px sans-serif; fill: #6b7280; text-anchor: middle; dominant-baseline: central; }
+.route { fill: none; stroke: #d9480f; stroke-width: 4; stroke-linejoin: round; stroke-linecap: round; opacity: 0.85; }
+";
+
 /// Draws `maze` as a standalone SVG document; `path`, when given, is drawn as a
 /// polyline through the centres of its cells (for example a solver's
 /// [`Solution::path`](super::solver::Solution::path)).
@@ -29,12 +37,7 @@ pub fn svg(maze: &Maze, path: Option<&[Position]>) -> String {
         out,
         r##"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" viewBox="0 0 {size} {size}">
 <title>maze {n}x{n}</title>
-<style>
-.wall {{ stroke: #1d2330; stroke-width: 5; stroke-linecap: round; }}
-.post {{ fill: #1d2330; }}
-.axis {{ font: 11px sans-serif; fill: #6b7280; text-anchor: middle; dominant-baseline: central; }}
-.route {{ fill: none; stroke: #d9480f; stroke-width: 4; stroke-linejoin: round; stroke-linecap: round; opacity: 0.85; }}
-</style>
+<style>{SVG_STYLE}</style>
 <rect x="0" y="0" width="{size}" height="{size}" fill="#ffffff"/>
 <rect x="{MARGIN}" y="{MARGIN}" width="{side}" height="{side}" fill="#f8f9fb"/>
 "##,

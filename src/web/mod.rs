@@ -8,4 +8,5 @@
 
 pub mod layout;
 pub mod pages;
+pub mod policy;
 pub mod viewer;

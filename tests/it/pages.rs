@@ -468,3 +468,106 @@ async fn the_rust_kit_uploaded_as_source_builds_with_cargo_and_plays() {
     let m = wait_match(&server, q["match_id"].as_i64().unwrap()).await;
     assert_eq!(m["status"], "finished", "{m}");
 }
+
+/// The texts of every inline `<tag>` element of `html` (a `<script>` of type
+/// `application/json` is data, not a script, and is left out).
+fn inline_texts(html: &str, tag: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let open = format!("<{tag}");
+    let close = format!("</{tag}>");
+    let mut rest = html;
+    while let Some(start) = rest.find(&open) {
+        let after = &rest[start..];
+        let head_end = after.find('>').unwrap();
+        let head = &after[..head_end];
+        let body = &after[head_end + 1..];
+        let end = body.find(&close).unwrap();
+        if !head.contains("application/json") {
+            out.push(body[..end].to_string());
+        }
+        rest = &body[end..];
+    }
+    out
+}
+
+#[tokio::test]
+async fn every_page_runs_only_its_own_scripts_and_styles_and_cannot_be_framed() {
+    use base64::Engine;
+    use sha2::Digest;
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (bot, token) = register(
+        &server,
+        "policy-bot",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": 1, "seed": 1}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let id = q["match_id"].as_i64().unwrap();
+    wait_match(&server, id).await;
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "cup", "bot_ids": [bot], "maze_ids": [1], "repeats": 1}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    let tournament = t["tournament_id"].as_i64().unwrap();
+    let client = reqwest::Client::new();
+    for path in [
+        "/".to_string(),
+        "/bots".into(),
+        format!("/bots/{bot}"),
+        "/mazes/1".into(),
+        format!("/matches/{id}"),
+        format!("/tournaments/{tournament}"),
+        "/api/leaderboard".into(),
+    ] {
+        let resp = client
+            .get(format!("{}{path}", server.base))
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(resp.status(), 200, "{path}");
+        let header = |name: &str| {
+            resp.headers()
+                .get(name)
+                .map(|v| v.to_str().unwrap().to_string())
+                .unwrap_or_else(|| panic!("{path} has no {name}"))
+        };
+        assert_eq!(header("x-content-type-options"), "nosniff");
+        assert_eq!(header("x-frame-options"), "DENY");
+        assert_eq!(header("referrer-policy"), "no-referrer");
+        let csp = header("content-security-policy");
+        assert!(csp.contains("frame-ancestors 'none'"), "{csp}");
+        assert!(csp.contains("default-src 'none'"), "{csp}");
+        assert!(!csp.contains("unsafe-inline"), "{csp}");
+        let html = resp.text().await.unwrap();
+        // Every inline script and style is allowed by its hash, and nothing else is
+        // inline: no event handler, no style attribute.
+        for tag in ["script", "style"] {
+            for text in inline_texts(&html, tag) {
+                let hash = base64::engine::general_purpose::STANDARD
+                    .encode(sha2::Sha256::digest(text.as_bytes()));
+                assert!(
+                    csp.contains(&format!("'sha256-{hash}'")),
+                    "{path}: an inline {tag} the policy does not allow: {}",
+                    &text[..text.len().min(80)]
+                );
+            }
+        }
+        assert!(!html.contains(" style=\""), "{path} has a style attribute");
+        for handler in [" onclick=", " onload=", " onerror=", " onsubmit="] {
+            assert!(!html.contains(handler), "{path} has {handler}");
+        }
+    }
+}

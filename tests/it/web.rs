@@ -207,6 +207,20 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     b.open(&format!("{}/tournaments/{tid}", server.base), "table.grid")
         .await;
     assert_eq!(b.attr("#progress", "data-done").await, Some("4".into()));
+    // The page's own script ran under its Content-Security-Policy: it drew the bar.
+    let width = b
+        .client
+        .execute(
+            "return document.getElementById('progress-bar').style.width",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(
+        width.as_str(),
+        Some("100%"),
+        "the progress script did not run"
+    );
     let grid = b.text("table.grid").await;
     assert!(grid.contains("simple") && grid.contains("broken"), "{grid}");
     b.screenshot("tournament-page").await;

@@ -37,7 +37,7 @@
   document.querySelectorAll('a.build-log').forEach(function (a) {
     a.addEventListener('click', function (e) {
       e.preventDefault();
-      get('/api/bots/BOT_ID/versions/' + a.dataset.version + '/build-log').then(function (j) {
+      get('/api/bots/' + form.dataset.bot + '/versions/' + a.dataset.version + '/build-log').then(function (j) {
         block('build of version ' + j.version + ' (' + j.build_status + ')', j.build_log || '(no output yet)');
       }).catch(function (err) { block('build of version ' + a.dataset.version, 'error: ' + err.message + ' (paste the owner token above)'); });
     });

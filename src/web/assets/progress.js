@@ -3,6 +3,8 @@
 (function () {
   var box = document.getElementById('progress');
   var id = box.dataset.tournament, total = +box.dataset.total, done = +box.dataset.done;
+  var bar = document.getElementById('progress-bar');
+  bar.style.width = bar.dataset.pct + '%';
   if (done >= total) { return; }
   var timer = setInterval(function () {
     fetch('/api/tournaments/' + id).then(function (r) { return r.json(); }).then(function (t) {

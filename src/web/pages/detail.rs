@@ -67,18 +67,18 @@ pub fn bot(p: &BotPage) -> String {
         p { a href={ "/matches?bot_id=" (b.bot_id) } { "All " (count_text(p.total_matches)) } }
         h2 { "Owner's logs" }
         p.muted { "The bot's owner can see each failed match's stderr and the build logs: paste the owner token (it stays in this page and is sent only to this server's API)." }
-        form.inline #owner-form {
+        form.inline #owner-form data-bot=(b.bot_id) {
             input #owner-token type="password" placeholder="owner token" autocomplete="off";
             button type="submit" { "Show logs" }
         }
         div #owner-logs {}
-        script { (PreEscaped(OWNER_LOGS_JS.replace("BOT_ID", &b.bot_id.to_string()))) }
+        script { (PreEscaped(OWNER_LOGS_JS)) }
     };
     page(&b.name, body)
 }
 
 /// The bot page's script: the owner's logs, fetched with the pasted token.
-const OWNER_LOGS_JS: &str = include_str!("../assets/owner_logs.js");
+pub const OWNER_LOGS_JS: &str = include_str!("../assets/owner_logs.js");
 
 /// A maze's page: public mazes drawn with their optimal route; hidden ones named only.
 pub fn maze(m: &MazeRow, svg: Option<&str>, recent: &[MatchLine]) -> String {
@@ -188,7 +188,7 @@ pub fn tournament(p: &TournamentPage) -> String {
         h1 { (t.name) }
         p.lead { "Tournament " (t.tournament_id) ", created " (time(t.created_at)) ", " (t.repeats) " repeat(s) of every bot on every maze." }
         div #progress data-tournament=(t.tournament_id) data-done=(t.done) data-total=(t.total) {
-            div.progress { div #progress-bar style={ "width:" (pct) "%" } {} }
+            div.progress { div #progress-bar data-pct=(pct) {} }
             p #progress-text { (t.done) " of " (t.total) " matches played" }
         }
         h2 { "Standings" }
@@ -221,4 +221,4 @@ pub fn tournament(p: &TournamentPage) -> String {
 }
 
 /// Live progress: polls the tournament's JSON until it is complete.
-const PROGRESS_JS: &str = include_str!("../assets/progress.js");
+pub const PROGRESS_JS: &str = include_str!("../assets/progress.js");

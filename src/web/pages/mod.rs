@@ -10,7 +10,10 @@ mod detail;
 mod lists;
 
 pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
-pub use detail::{BotPage, Cell, MatchPage, TournamentPage, bot, match_page, maze, tournament};
+pub use detail::{
+    BotPage, Cell, MatchPage, OWNER_LOGS_JS, PROGRESS_JS, TournamentPage, bot, match_page, maze,
+    tournament,
+};
 pub use lists::{
     MatchLine, MatchPager, Pager, bots, match_table, matches, mazes, tournaments, workers,
 };
