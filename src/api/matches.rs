@@ -127,9 +127,13 @@ pub struct ReplayView {
     /// the admin: a hidden maze's layout is never served to anyone else).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub maze_layout: Option<String>,
-    /// Every step: run, step, sensors, action, event, position, heading, warnings, answer_us.
+    /// Every step: run, step, sensors, action, event, position, heading, warnings,
+    /// answer_us, debug, and stderr (the bot's owner and the admin only).
     #[schema(value_type = Vec<Object>)]
     pub trace: Value,
+    /// False when the steps' stderr lines were left out: they are the bot owner's (send
+    /// the owner token to get them).
+    pub stderr_shown: bool,
 }
 
 /// A match's failure details and the bot's stderr tail (owner or admin). For a hidden
@@ -293,7 +297,8 @@ async fn list_matches(
     }))
 }
 
-/// The per-step trace and the maze (a hidden maze's match: the admin only).
+/// The per-step trace and the maze (a hidden maze's match: the admin only); the bot's
+/// stderr lines only for its owner and the admin.
 #[utoipa::path(get, path = "/api/matches/{id}/replay", tag = "matches",
     params(("id" = i64, Path, description = "match id")),
     responses(
@@ -328,6 +333,13 @@ async fn get_match_replay(
                 row.status
             ))
         })?;
+    // The bot's stderr is its owner's: left out for everyone else, public maze or not.
+    let stderr_shown = caller.owns(&state, row.bot_id).await?;
+    let record = if stderr_shown {
+        record
+    } else {
+        record.without_stderr()
+    };
     let maze = find_maze(&state, row.maze_id).await?;
     Ok(axum::Json(ReplayView {
         match_id: id,
@@ -336,6 +348,7 @@ async fn get_match_replay(
         maze_dim: maze.dim,
         maze_layout: (!maze.hidden || caller.is_admin()).then_some(maze.layout),
         trace: serde_json::to_value(&record.trace).unwrap_or(Value::Array(vec![])),
+        stderr_shown,
     }))
 }
 

@@ -303,6 +303,16 @@ pub struct MatchRecord {
 }
 
 impl MatchRecord {
+    /// Removes what only the bot's owner (and the admin) may read: its stderr, per step
+    /// and the tail. The debug drawing stays.
+    pub fn without_stderr(mut self) -> MatchRecord {
+        self.stderr_tail.clear();
+        for step in &mut self.trace {
+            step.stderr.clear();
+        }
+        self
+    }
+
     /// The record without its trace, for summaries.
     pub fn summary(&self) -> MatchRecord {
         MatchRecord {

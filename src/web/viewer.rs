@@ -49,6 +49,9 @@ pub struct ViewerData<'a> {
     pub record: &'a MatchRecord,
     /// The file name of "download replay".
     pub download_name: String,
+    /// True when the record's stderr was left out (it is the bot owner's): the viewer
+    /// says so, and shows it when the page hands it the owner's copy.
+    pub stderr_hidden: bool,
 }
 
 impl<'a> ViewerData<'a> {
@@ -71,6 +74,7 @@ impl<'a> ViewerData<'a> {
             }),
             record,
             download_name,
+            stderr_hidden: false,
         }
     }
 }

@@ -241,6 +241,61 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     b.screenshot("match-page").await;
     drive_viewer(&b, &trace, "match-page").await;
 
+    // A bot's stderr is its owner's, on a public maze too: the page and the anonymous
+    // replay carry none of it; the owner's token shows it in the viewer.
+    let chatty = std::fs::read_to_string(root().join("tests/fixtures/bots/chatty.py")).unwrap();
+    let (talker, talker_token) = register(
+        &server,
+        "talker",
+        "python3 bot.py",
+        json!({"bot.py": chatty}),
+    )
+    .await;
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": talker, "maze_id": 1, "seed": 1}),
+            Some(&talker_token),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let tm = q["match_id"].as_i64().unwrap();
+    crate::support::wait_match(&server, tm).await;
+    let (_, anon) = server.get(&format!("/api/matches/{tm}/replay"), None).await;
+    assert_eq!(anon["stderr_shown"], false);
+    assert!(!anon.to_string().contains("thinking about step"), "{anon}");
+    let (_, own) = server
+        .get(&format!("/api/matches/{tm}/replay"), Some(&talker_token))
+        .await;
+    assert_eq!(own["stderr_shown"], true);
+    assert!(own.to_string().contains("thinking about step 2"));
+    b.open(&format!("{}/matches/{tm}#step=2", server.base), "#robot")
+        .await;
+    assert!(!b.source().await.contains("thinking about step"));
+    assert!(b.text("#step-stderr").await.contains("shown to its owner"));
+    b.client
+        .find(fantoccini::Locator::Css("#match-owner-token"))
+        .await
+        .unwrap()
+        .send_keys(&talker_token)
+        .await
+        .unwrap();
+    b.click("#match-owner-form button").await;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !b
+        .text("#step-stderr")
+        .await
+        .contains("thinking about step 2")
+    {
+        assert!(
+            Instant::now() < deadline,
+            "the owner's stderr did not appear: {}",
+            b.text("#match-owner-status").await
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    b.screenshot("match-page-owner-stderr").await;
+
     let _ = token;
     b.quit().await;
 }

@@ -207,7 +207,12 @@ async fn match_page(
     } else {
         state.storage.get_record(id).await.ok().flatten()
     };
-    if let Some(mut r) = stored.filter(|_| row.total_steps.is_some()) {
+    // Pages never use a token: the bot's stderr (its owner's) is left out, and the
+    // page's owner form fetches it from the API with the pasted token.
+    if let Some(mut r) = stored
+        .filter(|_| row.total_steps.is_some())
+        .map(MatchRecord::without_stderr)
+    {
         let m = super::mazes::find_maze(&state, row.maze_id).await?;
         maze = mazefile::parse(m.layout.as_bytes()).ok();
         r.maze_layout = Some(m.layout);
@@ -218,9 +223,10 @@ async fn match_page(
         "match {id}: {} on {} (seed {})",
         line.row.bot_name, line.row.maze_name, line.row.seed
     );
-    let viewer = record
-        .as_ref()
-        .map(|r| ViewerData::new(title, r, maze.as_ref(), format!("match-{id}.json")));
+    let viewer = record.as_ref().map(|r| ViewerData {
+        stderr_hidden: true,
+        ..ViewerData::new(title, r, maze.as_ref(), format!("match-{id}.json"))
+    });
     Ok(Html(web::match_page(&web::MatchPage { line, viewer })))
 }
 

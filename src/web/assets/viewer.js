@@ -77,6 +77,9 @@
     var record = isObj(data.record) ? data.record : {};
     var trace = Array.isArray(record.trace) ? record.trace.map(function (s) { return isObj(s) ? s : {}; }) : [];
     var T = trace.length;
+    // The bot's stderr is its owner's: a page shows it once the owner's token is given.
+    var stderrHidden = data.stderr_hidden === true;
+    var HIDDEN_STDERR = "the bot's stderr is shown to its owner: paste the owner token below the viewer";
     var layoutStr = data.maze && typeof data.maze.layout === 'string' ? data.maze.layout : null;
     var maze = parseLayout(layoutStr);
     var n = maze ? maze.n : [data.maze && data.maze.dim, record.maze_dim, 16].filter(function (v) { return isInt(v) && v >= 2 && v <= 64; })[0];
@@ -390,7 +393,7 @@
         }
       }
       var lines = k > 0 && Array.isArray(trace[k - 1].stderr) ? trace[k - 1].stderr.slice(0, 500).map(function (l) { return text(l, 4000); }) : [];
-      pre(stderrBox, lines.join('\n'), 'no stderr output at this step');
+      pre(stderrBox, lines.join('\n'), stderrHidden ? HIDDEN_STDERR : 'no stderr output at this step');
       // debug text and where the shown debug came from
       var ti = dbgSrc.text[k];
       pre(dbgText, ti >= 0 ? text(trace[ti].debug.text, 20000) : '', 'no debug text');
@@ -441,7 +444,7 @@
       notices.slice(0, 200).forEach(function (x) { list.appendChild(html('li', null, 'step ' + text(x.step, 20) + ': ' + text(x.message, 500))); });
       $('mv-notes').hidden = notices.length === 0;
       var tail = text(record.stderr_tail, 100000);
-      pre($('mv-tail-text'), tail, 'no stderr output');
+      pre($('mv-tail-text'), tail, stderrHidden ? HIDDEN_STDERR : 'no stderr output');
       if (T === 0 && tail) $('mv-tail').open = true;
     })();
 
@@ -558,6 +561,18 @@
     window.addEventListener('hashchange', function () { var h = hashStep(); if (h !== null) go(h); });
     var start = hashStep();
     setStep(start === null ? 0 : start);
+
+    // Called by the page with the replay and log the owner's token fetched.
+    window.mazearenaViewer = {
+      showStderr: function (steps, tail) {
+        if (Array.isArray(steps)) {
+          steps.forEach(function (s, i) { if (trace[i] && isObj(s) && Array.isArray(s.stderr)) trace[i].stderr = s.stderr; });
+        }
+        stderrHidden = false;
+        pre($('mv-tail-text'), text(tail, 100000), 'no stderr output');
+        renderPanel(cur);
+      }
+    };
   }
 
   function safeInit() {

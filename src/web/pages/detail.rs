@@ -77,6 +77,10 @@ pub fn bot(p: &BotPage) -> String {
     page(&b.name, body)
 }
 
+/// The match page's script: the bot's stderr, fetched with the pasted owner token and
+/// handed to the viewer.
+pub const MATCH_STDERR_JS: &str = include_str!("../assets/match_stderr.js");
+
 /// The bot page's script: the owner's logs, fetched with the pasted token.
 pub const OWNER_LOGS_JS: &str = include_str!("../assets/owner_logs.js");
 
@@ -131,7 +135,17 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
             a href={ "/api/matches/" (r.match_id) } { "JSON" }
         }
         @match &p.viewer {
-            Some(data) => (embed(data)),
+            Some(data) => {
+                (embed(data))
+                h2 { "Owner's stderr" }
+                p.muted { "The bot's stderr is its owner's: paste the owner token to see it in the viewer (the token stays in this page and is sent only to this server's API)." }
+                form.inline #match-owner-form data-match=(r.match_id) {
+                    input #match-owner-token type="password" placeholder="owner token" autocomplete="off";
+                    button type="submit" { "Show stderr" }
+                }
+                p #match-owner-status.muted {}
+                script { (PreEscaped(MATCH_STDERR_JS)) }
+            },
             None => {
                 @if r.maze_hidden {
                     p.muted { "Played on a hidden ranking maze: its replay is not shown." }

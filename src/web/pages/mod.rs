@@ -11,8 +11,8 @@ mod lists;
 
 pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
 pub use detail::{
-    BotPage, Cell, MatchPage, OWNER_LOGS_JS, PROGRESS_JS, TournamentPage, bot, match_page, maze,
-    tournament,
+    BotPage, Cell, MATCH_STDERR_JS, MatchPage, OWNER_LOGS_JS, PROGRESS_JS, TournamentPage, bot,
+    match_page, maze, tournament,
 };
 pub use lists::{
     MatchLine, MatchPager, Pager, bots, match_table, matches, mazes, tournaments, workers,
