@@ -185,6 +185,16 @@ pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64>
             .get_bot_version(existing.bot_version_id)
             .await?
             .ok_or_else(|| RegistryError::Internal("a bot's latest version vanished".into()))?;
+        // A bot registered through the API belongs to its owner: only the owner's token
+        // adds a version to it, never a local tournament run on the server's database.
+        if latest.bundle_sha256.is_some() {
+            return Err(RegistryError::Conflict(format!(
+                "the bot name {:?} is taken by bot {} of this database, registered through \
+                 the API: a local tournament never changes it; give the local bot another \
+                 name (its manifest's `name`) or use another --database",
+                bot.name, existing.bot_id
+            )));
+        }
         let same = latest.files_sha256 == summary.sha256
             && latest.dir == dir
             && latest.command == bot.command

@@ -589,3 +589,49 @@ fn tournament_refuses_a_bad_manifest() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("bot.toml"));
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_local_tournament_on_a_servers_database_never_changes_an_uploaded_bot() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = crate::support::TestServer::start(dir.path(), &["--jobs", "1"]);
+    let (bot, _token) = crate::support::register(
+        &server,
+        "simple-python",
+        "python3 simple_bot.py",
+        crate::support::simple_bot_files(),
+    )
+    .await;
+    // A local bot of the same name, in a tournament on the server's own database file.
+    let local = dir.path().join("local");
+    std::fs::create_dir(&local).unwrap();
+    for f in ["simple_bot.py", "mazebot.py"] {
+        std::fs::copy(root().join("bots/python").join(f), local.join(f)).unwrap();
+    }
+    std::fs::write(
+        local.join("bot.toml"),
+        "name = \"simple-python\"\ncommand = \"python3 simple_bot.py --other\"\n",
+    )
+    .unwrap();
+    let out = mazearena(&[
+        "tournament",
+        "--bots",
+        local.to_str().unwrap(),
+        "--mazes",
+        shared_maze("classic/test_maze_01.txt").to_str().unwrap(),
+        "--database",
+        &server.database,
+        "--json",
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "the tournament changed the server's bot"
+    );
+    assert!(
+        said.contains(&format!("taken by bot {bot}")) && said.contains("through the API"),
+        "{said}"
+    );
+    let (_, v) = server.get(&format!("/api/bots/{bot}"), None).await;
+    assert_eq!(v["versions"].as_array().map(Vec::len), Some(1), "{v}");
+    assert_eq!(v["versions"][0]["command"], "python3 simple_bot.py", "{v}");
+}
