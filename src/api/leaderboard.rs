@@ -64,6 +64,22 @@ async fn get_leaderboard(
 
 /// The standings as `caller` may see them: without the score/optimum ratio of a bot
 /// whose counted matches include a hidden maze, unless the caller is the admin.
+/// A tournament's standings as `caller` may see them, and whether they are sealed:
+/// while a tournament with hidden mazes is not complete, anyone but the admin gets no
+/// standings (each match's result would show as the change in its bot's mean).
+pub(super) fn tournament_for_caller(
+    rows: Vec<Standing>,
+    caller: &Caller,
+    complete: bool,
+) -> (Vec<Standing>, bool) {
+    let sealed = !caller.is_admin() && !complete && rows.iter().any(|r| r.hidden_played > 0);
+    if sealed {
+        (Vec::new(), true)
+    } else {
+        (for_caller(rows, caller), false)
+    }
+}
+
 pub(super) fn for_caller(mut rows: Vec<Standing>, caller: &Caller) -> Vec<Standing> {
     if !caller.is_admin() {
         for row in rows.iter_mut().filter(|r| r.hidden_played > 0) {

@@ -233,6 +233,7 @@ async fn get_match(
 
 /// A match as the caller may see it (`reveal`: not a hidden maze's, or the admin).
 pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
+    let row = if reveal { row } else { row.redacted() };
     let summary = row.summary();
     let json = |v: Option<serde_json::Result<Value>>| v.and_then(Result::ok).unwrap_or(Value::Null);
     MatchView {
@@ -315,7 +316,7 @@ async fn get_match_replay(
     if row.maze_hidden && !caller.is_admin() {
         let msg = format!(
             "match {id} was played on a hidden (ranking) maze: its replay would show the maze, \
-             so only the admin may see it; GET /api/matches/{id} has its status, score and steps"
+             so only the admin may see it; GET /api/matches/{id} has its status"
         );
         return Err(match caller {
             Caller::Anonymous => ApiError::Unauthorized(msg),
@@ -384,7 +385,11 @@ async fn get_match_log(
     Ok(axum::Json(LogView {
         match_id: id,
         status: row.status.to_string(),
-        step: error.as_ref().and_then(|e| e.step).map(u64::from),
+        step: error
+            .as_ref()
+            .and_then(|e| e.step)
+            .map(u64::from)
+            .filter(|_| !redacted),
         redacted,
         stderr_tail: (!redacted).then_some(stderr_tail),
         error: (!redacted).then(|| serde_json::to_value(&error).unwrap_or(Value::Null)),

@@ -56,8 +56,11 @@ pub struct TournamentView {
     pub done: i64,
     /// Matches in all.
     pub total: i64,
-    /// Standings so far, best first.
+    /// Standings so far, best first (empty while sealed).
     pub standings: Vec<Standing>,
+    /// True while the standings are withheld: the tournament has hidden mazes and is
+    /// not complete (anyone but the admin sees them once every match is played).
+    pub standings_sealed: bool,
 }
 
 /// Start a tournament (admin token).
@@ -132,6 +135,7 @@ async fn create_tournament(
             done: t.done,
             total: t.total,
             standings: Vec::new(),
+            standings_sealed: false,
         }),
     ))
 }
@@ -151,9 +155,10 @@ async fn get_tournament(
         .get_tournament(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-    let standings = super::leaderboard::for_caller(
+    let (standings, standings_sealed) = super::leaderboard::tournament_for_caller(
         state.storage.leaderboard(Scope::Tournament(id)).await?,
         &caller,
+        t.done >= t.total,
     );
     Ok(axum::Json(TournamentView {
         tournament_id: t.tournament_id,
@@ -162,6 +167,7 @@ async fn get_tournament(
         done: t.done,
         total: t.total,
         standings,
+        standings_sealed,
     }))
 }
 

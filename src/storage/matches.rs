@@ -71,6 +71,35 @@ pub struct MatchRow {
 }
 
 impl MatchRow {
+    /// The row as anyone but the admin may see it: on a hidden maze, whether it finished
+    /// and else the kind of failure (its status), nothing more: no score, no steps, no
+    /// failure step or text, no start or end time (each of these could carry a few bits
+    /// of the maze, chosen by the bot). A public maze's row is unchanged.
+    pub fn redacted(mut self) -> MatchRow {
+        if self.maze_hidden {
+            self.score = None;
+            self.run0_steps = None;
+            self.run1_steps = None;
+            self.total_steps = None;
+            self.started_at = None;
+            self.finished_at = None;
+            if let Some(summary) = self
+                .record
+                .as_deref()
+                .and_then(|r| serde_json::from_str::<crate::runner::outcome::MatchSummary>(r).ok())
+            {
+                let kept = crate::runner::outcome::MatchSummary {
+                    engine_version: summary.engine_version,
+                    limits: summary.limits,
+                    status: summary.status,
+                    ..Default::default()
+                };
+                self.record = serde_json::to_string(&kept).ok();
+            }
+        }
+        self
+    }
+
     /// The row's summary of the record (empty while the match is not played; a summary
     /// that cannot be read counts as empty).
     pub fn summary(&self) -> MatchSummary {

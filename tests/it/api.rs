@@ -947,7 +947,17 @@ async fn non_admins_see_no_hash_dim_or_optimum_of_a_hidden_maze() {
             (&m["status"], m["maze_hidden"].as_bool()),
             (&json!("finished"), Some(true))
         );
-        assert!(m["score"].is_f64() && m["run1_steps"].is_u64() && m["total_steps"].is_u64());
+        // Whether it finished, nothing more: each number could carry bits of the maze.
+        for key in [
+            "score",
+            "run0_steps",
+            "run1_steps",
+            "total_steps",
+            "started_at",
+            "finished_at",
+        ] {
+            assert!(m[key].is_null(), "{key} shown: {m}");
+        }
         let (_, tv) = server.get(&format!("/api/tournaments/{tid}"), caller).await;
         assert_eq!(tv["standings"][0]["played"], 1, "{tv}");
         assert!(tv["standings"][0]["mean_ratio"].is_null(), "{tv}");
@@ -995,15 +1005,26 @@ async fn an_owner_gets_no_replay_or_stderr_of_a_hidden_maze_match() {
     let id = q["match_id"].as_i64().unwrap();
     let done = wait_match(&server, id).await;
     assert_eq!(done["status"], "crashed", "{done}");
-    // The owner: status and steps; the log's status and step only; no replay.
+    // The owner: the status (the kind of failure) only, in the view and the log; no
+    // replay.
     let (_, m) = server
         .get(&format!("/api/matches/{id}"), Some(&token))
         .await;
-    assert_eq!(
-        (&m["status"], &m["total_steps"]),
-        (&json!("crashed"), &done["total_steps"])
+    assert_eq!(m["status"], "crashed", "{m}");
+    for key in [
+        "score",
+        "total_steps",
+        "run0_steps",
+        "started_at",
+        "finished_at",
+    ] {
+        assert!(m[key].is_null(), "{key} shown: {m}");
+    }
+    let (_, admin) = server.get(&format!("/api/matches/{id}"), Some(ADMIN)).await;
+    assert!(
+        admin["total_steps"].is_u64(),
+        "the admin sees it all: {admin}"
     );
-    assert!(m["total_steps"].is_u64() && m["score"].is_null(), "{m}");
     let (s, log) = server
         .get(&format!("/api/matches/{id}/log"), Some(&token))
         .await;
@@ -1012,7 +1033,10 @@ async fn an_owner_gets_no_replay_or_stderr_of_a_hidden_maze_match() {
         (&log["status"], &log["redacted"]),
         (&json!("crashed"), &json!(true))
     );
-    assert!(log["step"].is_null() || log["step"].is_u64(), "{log}");
+    assert!(
+        log["step"].is_null(),
+        "the failure step is not shown: {log}"
+    );
     assert!(
         log.get("error").is_none() && log.get("stderr_tail").is_none(),
         "{log}"
@@ -1243,4 +1267,103 @@ async fn raw_post_headers(base: &str, path: &str, length: usize) -> (u16, Value)
         .and_then(|i| body.rfind('}').map(|j| &body[i..=j]))
         .unwrap_or("");
     (status, serde_json::from_str(json).unwrap_or(Value::Null))
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_bot_encoding_a_hidden_maze_in_its_step_count_leaks_nothing_per_match() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "2"]);
+    // The attack: map what it can, then crash at a step that encodes it (here: the
+    // readings of its first steps and its seed, so every match ends at another step).
+    let encoder = "import json, sys\nsteps = 0\nstart = json.loads(sys.stdin.readline())\n\
+                   code = 0\nfor line in sys.stdin:\n    m = json.loads(line)\n    \
+                   if m.get('type') != 'sense':\n        break\n    steps += 1\n    \
+                   code = code * 3 + sum(m['sensors']) % 3\n    \
+                   if steps >= 4 + (code + start.get('seed', 0)) % 40:\n        sys.exit(0)\n    \
+                   print(json.dumps({'rotation': 90, 'movement': 1}), flush=True)\n";
+    let (bot, token) = register(
+        &server,
+        "encoder",
+        "python3 bot.py",
+        json!({"bot.py": encoder}),
+    )
+    .await;
+    let hidden = generate_hidden(&server, "ranking-secret").await;
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "ranking", "bot_ids": [bot], "maze_ids": [hidden], "repeats": 8}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    let tid = t["tournament_id"].as_i64().unwrap();
+    // While it runs: standings sealed for everyone but the admin.
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let (_, v) = server.get(&format!("/api/tournaments/{tid}"), None).await;
+        if v["done"] == v["total"] {
+            break;
+        }
+        if v["done"].as_i64() > Some(0) {
+            assert_eq!(v["standings_sealed"], true, "{v}");
+            assert_eq!(v["standings"], json!([]), "{v}");
+        }
+        assert!(Instant::now() < deadline, "the tournament did not end: {v}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    // The admin sees that the matches did end at different steps: the attack was real.
+    let (_, all) = server
+        .get(&format!("/api/matches?tournament_id={tid}"), Some(ADMIN))
+        .await;
+    let steps: std::collections::BTreeSet<String> = all["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["total_steps"].to_string())
+        .collect();
+    assert!(
+        steps.len() > 1,
+        "the fixture must vary its step count: {all}"
+    );
+    // Anyone else, the owner included, reads the same thing of every match: its status.
+    for caller in [None, Some(token.as_str())] {
+        let (_, list) = server
+            .get(&format!("/api/matches?tournament_id={tid}"), caller)
+            .await;
+        let mut seen = std::collections::BTreeSet::new();
+        for item in list["items"].as_array().unwrap() {
+            let id = item["match_id"].as_i64().unwrap();
+            let (_, one) = server.get(&format!("/api/matches/{id}"), caller).await;
+            let (_, log) = server.get(&format!("/api/matches/{id}/log"), caller).await;
+            for mut v in [item.clone(), one, log] {
+                if let Some(o) = v.as_object_mut() {
+                    for k in ["match_id", "seed", "repeat", "created_at", "attempts"] {
+                        o.remove(k);
+                    }
+                }
+                seen.insert(v.to_string());
+            }
+        }
+        // One view per endpoint (list item, match, log), equal for all 8 matches.
+        assert!(seen.len() <= 3, "a match differs from another: {seen:#?}");
+        for page in [
+            format!("/tournaments/{tid}"),
+            format!("/bots/{bot}"),
+            format!("/matches?tournament_id={tid}"),
+        ] {
+            let (s, html) = server.get_text(&page).await;
+            assert_eq!(s, 200);
+            // (Numbers under 10 stand on a page for other reasons: repeats, counts.)
+            for n in steps
+                .iter()
+                .filter(|n| n.parse::<u64>().is_ok_and(|n| n >= 10))
+            {
+                assert!(
+                    !html.contains(&format!(">{n}<")) && !html.contains(&format!(" {n} ")),
+                    "{page} shows a step count {n}"
+                );
+            }
+        }
+    }
 }

@@ -254,6 +254,17 @@ impl TestServer {
         (status, json, headers)
     }
 
+    /// GET without a token returning status and the body as text (a page).
+    pub async fn get_text(&self, path: &str) -> (u16, String) {
+        let resp = self
+            .client
+            .get(format!("{}{path}", self.base))
+            .send()
+            .await
+            .expect("the server answers");
+        (resp.status().as_u16(), resp.text().await.unwrap())
+    }
+
     /// GET returning status and JSON.
     pub async fn get(&self, path: &str, token: Option<&str>) -> (u16, serde_json::Value) {
         let (s, v, _) = self.call(reqwest::Method::GET, path, None, token).await;

@@ -14,7 +14,7 @@ use serde::Deserialize;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppPath, AppQuery};
-use super::leaderboard::for_caller;
+use super::leaderboard::tournament_for_caller;
 use super::lists::{MatchListQuery, page};
 use crate::engine::{mazefile, render, solver};
 use crate::runner::{MatchRecord, MatchState, MatchStatus};
@@ -55,7 +55,7 @@ async fn mazes_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
 fn line(row: MatchRow) -> MatchLine {
     MatchLine {
         reason: public_reason(&row),
-        row,
+        row: row.redacted(),
     }
 }
 
@@ -72,16 +72,16 @@ async fn recent_matches(
     Ok((rows.into_iter().map(line).collect(), count))
 }
 
-/// A failure's reason as anyone may see it: on a hidden maze only its step (the text
-/// could carry what the bot sensed).
+/// A failure's reason as anyone may see it: on a hidden maze nothing but that it failed
+/// (the text, and even the step, could carry what the bot sensed).
 fn public_reason(row: &MatchRow) -> Option<String> {
     let error = row.summary().error?;
     let step = error.step;
     if row.maze_hidden {
-        return Some(step.map_or_else(
-            || "failed (hidden maze: details for the admin only)".into(),
-            |s| format!("failed at step {s} (hidden maze: details for the admin only)"),
-        ));
+        return Some(
+            "failed (hidden maze: its status is the kind of failure; details for the admin only)"
+                .into(),
+        );
     }
     let reason = error.reason.as_str();
     Some(match step {
@@ -271,9 +271,10 @@ async fn tournament_page(
         .get_tournament(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-    let standings = for_caller(
+    let (standings, sealed) = tournament_for_caller(
         state.storage.leaderboard(Scope::Tournament(id)).await?,
         &Caller::Anonymous,
+        t.done >= t.total,
     );
     let mut bots: Vec<(i64, String)> = Vec::new();
     let mut mazes: Vec<(i64, String)> = Vec::new();
@@ -289,6 +290,11 @@ async fn tournament_page(
         let key = (row.bot_id, row.maze_id);
         let c = cells.entry(key).or_default();
         c.total += 1;
+        // Nothing per hidden maze: not even how many finished.
+        if row.maze_hidden {
+            c.hidden = true;
+            continue;
+        }
         match row.status {
             MatchState::Queued | MatchState::Running => {}
             MatchState::Ended(MatchStatus::Finished) => {
@@ -318,5 +324,6 @@ async fn tournament_page(
         bots,
         mazes,
         cells,
+        standings_sealed: sealed,
     })))
 }

@@ -172,6 +172,8 @@ pub struct TournamentPage {
     /// Per (bot, maze): mean score over finished matches, played, finished, first
     /// match id.
     pub cells: std::collections::BTreeMap<(i64, i64), Cell>,
+    /// True while the standings are withheld (hidden mazes, not complete).
+    pub standings_sealed: bool,
 }
 
 /// One bot x maze cell of a tournament.
@@ -187,6 +189,8 @@ pub struct Cell {
     pub link: Option<i64>,
     /// Matches in all.
     pub total: i64,
+    /// On a hidden maze: nothing of it is shown.
+    pub hidden: bool,
 }
 
 /// A tournament's page: progress (updated live by polling the API), standings, and
@@ -206,7 +210,11 @@ pub fn tournament(p: &TournamentPage) -> String {
             p #progress-text { (t.done) " of " (t.total) " matches played" }
         }
         h2 { "Standings" }
-        (standings_table(&p.standings))
+        @if p.standings_sealed {
+            p.muted { "The standings appear once every match is played: the tournament has hidden mazes, and standings that change with each match would show that match's result." }
+        } @else {
+            (standings_table(&p.standings))
+        }
         h2 { "Bot x maze" }
         p.muted { "Mean score of the finished matches, and how many finished; a cell links to one of its matches (a failed one first)." }
         table.data.grid {
@@ -217,11 +225,15 @@ pub fn tournament(p: &TournamentPage) -> String {
                         td { a href={ "/bots/" (bot_id) } { (bot) } }
                         @for (maze_id, _) in &p.mazes {
                             @let c = p.cells.get(&(*bot_id, *maze_id)).cloned().unwrap_or_default();
+                            @if c.hidden {
+                                td.num { span.muted { "hidden" } }
+                            } @else {
                             td.num {
                                 @if c.finished > 0 { (format!("{:.3}", c.score_sum / c.finished as f64)) } @else if c.played > 0 { "DNF" } @else { span.muted { "…" } }
                                 br;
                                 span.muted { (c.finished) "/" (c.total) }
                                 @if let Some(id) = c.link { " " a href={ "/matches/" (id) } { "#" (id) } }
+                            }
                             }
                         }
                     }
