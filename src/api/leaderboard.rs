@@ -59,7 +59,49 @@ async fn get_leaderboard(
         }
     };
     let rows = state.storage.leaderboard(scope).await?;
-    Ok(axum::Json(for_caller(rows, &caller)))
+    Ok(axum::Json(settled_for_caller(&state, rows, &caller).await?))
+}
+
+/// The standings as `caller` may see them ([`for_caller`]), and for anyone but the
+/// admin without the bot versions that still have a match on a hidden maze queued or
+/// running (their numbers would move with each such match, showing its result); the
+/// others are ranked again among themselves.
+///
+/// # Errors
+/// Database failures.
+pub(super) async fn settled_for_caller(
+    state: &AppState,
+    rows: Vec<Standing>,
+    caller: &Caller,
+) -> ApiResult<Vec<Standing>> {
+    if caller.is_admin() {
+        return Ok(rows);
+    }
+    let pending: std::collections::HashSet<(i64, i64)> = state
+        .storage
+        .versions_pending_on_hidden_mazes()
+        .await?
+        .into_iter()
+        .collect();
+    if pending.is_empty() {
+        return Ok(for_caller(rows, caller));
+    }
+    let mut kept: Vec<Standing> = rows
+        .into_iter()
+        .filter(|r| !pending.contains(&(r.bot_id, r.version)))
+        .collect();
+    // Ranks again, ties (same mean score and finish rate) sharing one.
+    for i in 0..kept.len() {
+        kept[i].rank = if i > 0
+            && kept[i].mean_score == kept[i - 1].mean_score
+            && kept[i].finish_rate == kept[i - 1].finish_rate
+        {
+            kept[i - 1].rank
+        } else {
+            i as i64 + 1
+        };
+    }
+    Ok(for_caller(kept, caller))
 }
 
 /// The standings as `caller` may see them: without the score/optimum ratio of a bot

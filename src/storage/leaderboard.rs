@@ -47,6 +47,22 @@ pub struct Standing {
 }
 
 impl Storage {
+    /// The bot versions (bot id, version) with a match on a hidden maze still queued or
+    /// running: their standings move with each such match as it ends.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn versions_pending_on_hidden_mazes(&self) -> Result<Vec<(i64, i64)>> {
+        Ok(sqlx::query_as(
+            "select distinct v.bot_id, v.version from match m
+             join maze z on z.maze_id = m.maze_id
+             join bot_version v on v.bot_version_id = m.bot_version_id
+             where z.hidden and m.status in ('queued', 'running')",
+        )
+        .fetch_all(self.pool())
+        .await?)
+    }
+
     /// The standings, best mean score first (ties: higher finish rate, then name), read
     /// from the running sums of the `standing` table (kept by triggers on `match`): two
     /// rows per bot version (hidden and public mazes) for the whole ranking, a few per

@@ -1308,6 +1308,21 @@ async fn a_bot_encoding_a_hidden_maze_in_its_step_count_leaks_nothing_per_match(
         if v["done"].as_i64() > Some(0) {
             assert_eq!(v["standings_sealed"], true, "{v}");
             assert_eq!(v["standings"], json!([]), "{v}");
+            // Nor does the leaderboard count the bot while its hidden matches run.
+            for board in [
+                "/api/leaderboard".to_string(),
+                "/api/leaderboard?scope=all".into(),
+                format!("/api/leaderboard?tournament={tid}"),
+            ] {
+                let (_, rows) = server.get(&board, Some(&token)).await;
+                let (_, now) = server.get(&format!("/api/tournaments/{tid}"), None).await;
+                if now["done"] != now["total"] {
+                    assert!(
+                        rows.as_array().unwrap().iter().all(|r| r["bot_id"] != bot),
+                        "{board} counts a bot whose hidden matches are still running: {rows}"
+                    );
+                }
+            }
         }
         assert!(Instant::now() < deadline, "the tournament did not end: {v}");
         tokio::time::sleep(Duration::from_millis(50)).await;

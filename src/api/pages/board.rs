@@ -8,7 +8,7 @@ use serde::Deserialize;
 use super::super::AppState;
 use super::super::auth::Caller;
 use super::super::error::{ApiError, ApiResult, AppQuery};
-use super::super::leaderboard::for_caller;
+use super::super::leaderboard::settled_for_caller;
 use super::RECENT;
 use crate::storage::leaderboard::{Scope, Standing};
 use crate::storage::matches::Page;
@@ -45,11 +45,9 @@ pub(super) async fn leaderboard_page(
         })
         .await?;
     let storage = &state.storage;
+    let state = &state;
     let board = |scope| async move {
-        Ok::<_, ApiError>(for_caller(
-            storage.leaderboard(scope).await?,
-            &Caller::Anonymous,
-        ))
+        settled_for_caller(state, storage.leaderboard(scope).await?, &Caller::Anonymous).await
     };
     let (scope, rows) = match (q.tournament, q.scope.as_deref()) {
         (Some(_), Some(_)) => {
