@@ -105,7 +105,7 @@ EOF
   if curl -s -o /dev/null "$BASE/healthz"; then die "something already answers on port $PORT"; fi
   MAZEARENA_ADMIN_TOKEN=$ADMIN "$BIN" serve --bind "127.0.0.1:$PORT" \
     --database "sqlite://$WORK/db.sqlite" --data-dir "$WORK/data" --jobs 1 \
-    --max-queue 100000000 --shutdown-grace-secs 1 >"$WORK/server.log" 2>&1 &
+    --max-queue 100000000 --max-queued-per-owner 100000000 --shutdown-grace-secs 1 >"$WORK/server.log" 2>&1 &
   SERVER=$!
   until curl -s -o /dev/null "$BASE/healthz"; do
     kill -0 "$SERVER" 2>/dev/null || { cat "$WORK/server.log" >&2; die "the server did not start"; }

@@ -167,10 +167,16 @@ pub async fn serve(
             continue;
         };
         let _ = stream.set_nodelay(true);
-        let service = TowerToHyperService::new(
-            app.clone()
-                .map_request(|req: axum::http::Request<hyper::body::Incoming>| req.map(Body::new)),
-        );
+        // Each request carries its client's address (`ConnectInfo`), for the limits
+        // that count per address.
+        let service = TowerToHyperService::new(app.clone().map_request(
+            move |req: axum::http::Request<hyper::body::Incoming>| {
+                let mut req = req.map(Body::new);
+                req.extensions_mut()
+                    .insert(axum::extract::ConnectInfo(remote));
+                req
+            },
+        ));
         let connection = builder
             .serve_connection_with_upgrades(TokioIo::new(stream), service)
             .into_owned();

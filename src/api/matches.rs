@@ -167,7 +167,7 @@ pub struct LogView {
         (status = 400, body = ErrorBody), (status = 401, body = ErrorBody),
         (status = 403, body = ErrorBody), (status = 404, body = ErrorBody),
         (status = 409, body = ErrorBody, description = "the bot is paused"),
-        (status = 429, body = ErrorBody, description = "queue full; see Retry-After"),
+        (status = 429, body = ErrorBody, description = "the queue, or the owner's share of it, is full; see Retry-After"),
     ))]
 async fn create_match(
     State(state): State<AppState>,
@@ -195,6 +195,20 @@ async fn create_match(
         return Err(hidden_error(maze.maze_id, &caller));
     }
     check_capacity(&state, 1).await?;
+    if !caller.is_admin() {
+        let waiting = state.storage.queued_for_owner_of(bot.bot_id).await?;
+        let limit = state.settings.max_queued_per_owner;
+        if waiting >= limit {
+            return Err(ApiError::TooManyRequests {
+                message: format!(
+                    "the owner of bot {} has {waiting} matches waiting, its limit ({limit}); \
+                     queue more once some have been played",
+                    bot.bot_id
+                ),
+                retry_after_secs: RETRY_AFTER_SECS,
+            });
+        }
+    }
     let seed = match body.seed {
         Some(s) => s,
         None => random_seed()?,

@@ -57,6 +57,23 @@ pub struct Settings {
     pub max_queue: i64,
     /// The isolation of bots (`full` or `none`), shown by `/healthz`.
     pub sandbox_level: &'static str,
+    /// The most matches one owner may have waiting in the queue (the admin: no limit).
+    pub max_queued_per_owner: i64,
+    /// Bots registered per hour from one client address, anonymous registrations only
+    /// (`None`: no limit).
+    pub registrations: Option<Arc<RegistrationLimiter>>,
+}
+
+/// Registrations per client address: a keyed GCRA limiter (`governor`), in this
+/// server's memory.
+pub type RegistrationLimiter = governor::DefaultKeyedRateLimiter<std::net::IpAddr>;
+
+/// A limiter of `per_hour` registrations per address (`None` for 0: no limit).
+pub fn registration_limiter(per_hour: u32) -> Option<Arc<RegistrationLimiter>> {
+    let n = std::num::NonZeroU32::new(per_hour)?;
+    Some(Arc::new(governor::RateLimiter::keyed(
+        governor::Quota::per_hour(n),
+    )))
 }
 
 impl Settings {

@@ -58,6 +58,15 @@ pub struct ServeArgs {
     /// The most matches that may wait in the queue; more are refused with 429.
     #[arg(long, env = "MAZEARENA_MAX_QUEUE", default_value_t = 10_000)]
     max_queue: i64,
+    /// The most matches one owner (one owner token) may have waiting; more are refused
+    /// with 429 saying whose limit it is. The admin has none.
+    #[arg(long, env = "MAZEARENA_MAX_QUEUED_PER_OWNER", default_value_t = 50,
+          value_parser = clap::value_parser!(i64).range(1..))]
+    max_queued_per_owner: i64,
+    /// Bots that may be registered per hour from one client address without the admin
+    /// token (0: no limit); more are refused with 429 and Retry-After.
+    #[arg(long, env = "MAZEARENA_REGISTRATIONS_PER_HOUR", default_value_t = 20)]
+    registrations_per_hour: u32,
     /// The most connections open at once; a client over it is closed at once.
     #[arg(long, env = "MAZEARENA_MAX_CONNECTIONS", default_value_t = 4096,
           value_parser = clap::value_parser!(u32).range(1..))]
@@ -220,6 +229,8 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             data_dir,
             max_queue: args.max_queue,
             sandbox_level: sandbox.level(),
+            max_queued_per_owner: args.max_queued_per_owner,
+            registrations: api::registration_limiter(args.registrations_per_hour),
         }),
         metrics: metrics.clone(),
         wake: wake.clone(),

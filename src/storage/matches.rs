@@ -110,6 +110,51 @@ impl MatchRow {
     }
 }
 
+/// The order in which queued matches are played ([`Storage::claim_next`]): the next
+/// match is the first waiting match of the lane least recently served, in the class of
+/// lanes least recently served (table `queue_lane`). A lane is one owner's single matches
+/// or one tournament; the classes are single matches and tournaments. So while both
+/// wait, tournaments get every other match whatever is queued, and among single matches
+/// the owners take turns: a single match that is first in its owner's lane is played
+/// after at most one match of each other owner's lane and as many tournament matches,
+/// however much anyone queues.
+const FAIR_ORDER: &str = "
+    with ready as (
+        select m.match_id,
+            case when m.tournament_id is null then 'o:' || b.owner_token_hash
+                else 't:' || cast(m.tournament_id as text) end as lane,
+            case when m.tournament_id is null then 'class:s' else 'class:t' end as class
+        from match m
+        join bot_version v on v.bot_version_id = m.bot_version_id
+        join bot b on b.bot_id = v.bot_id
+        where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready'
+            and (cast($4 as bigint) is null or m.tournament_id = $4)
+    ),
+    heads as (
+        select lane, class, min(match_id) as match_id from ready group by lane, class
+    )
+    select m.match_id from heads h
+    join match m on m.match_id = h.match_id
+    left join queue_lane c on c.lane = h.class
+    left join queue_lane l on l.lane = h.lane
+    where m.status = 'queued'
+    order by coalesce(c.served, 0), h.class, coalesce(l.served, 0), h.match_id";
+
+/// Marks the lane and class of claimed match `$1` as served last.
+const MARK_SERVED: &str = "
+    insert into queue_lane (lane, served)
+    select x.lane, (select coalesce(max(served), 0) + 1 from queue_lane)
+    from (
+        select case when m.tournament_id is null then 'o:' || b.owner_token_hash
+                else 't:' || cast(m.tournament_id as text) end as lane
+        from match m join bot b on b.bot_id = m.bot_id where m.match_id = $1
+        union all
+        select case when m.tournament_id is null then 'class:s' else 'class:t' end
+        from match m where m.match_id = $1
+    ) x
+    where true
+    on conflict (lane) do update set served = excluded.served";
+
 /// A match a worker has claimed, with what it needs to play it.
 #[derive(Debug, Clone, PartialEq, FromRow)]
 pub struct ClaimedMatch {
@@ -270,9 +315,25 @@ impl Storage {
         )
     }
 
-    /// Claims the next queued match (single matches first, then by id) for `owner` until
-    /// `now + lease_ms`, in one statement. With `tournament`, only that tournament's.
-    /// Matches of a paused bot are never claimed.
+    /// How many matches of the owner of bot `bot_id` (its owner token, over every bot
+    /// registered with it) are waiting in the queue.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn queued_for_owner_of(&self, bot_id: i64) -> Result<i64> {
+        Ok(sqlx::query_scalar(
+            "select count(*) from match m join bot b on b.bot_id = m.bot_id
+             where m.status = 'queued' and b.owner_token_hash =
+                 (select owner_token_hash from bot where bot_id = $1)",
+        )
+        .bind(bot_id)
+        .fetch_one(self.pool())
+        .await?)
+    }
+
+    /// Claims the next queued match in the fair order ([`FAIR_ORDER`]) for `owner` until
+    /// `now + lease_ms`, in one statement. With `tournament`, only that tournament's, in
+    /// order. Matches of a paused bot are never claimed.
     ///
     /// # Errors
     /// Database failures.
@@ -291,16 +352,22 @@ impl Storage {
             Backend::Sqlite => "",
             Backend::Postgres => "for update of m skip locked",
         };
-        let id: Option<i64> = sqlx::query_scalar(&format!(
-            "update match set status = 'running', lease_owner = $1, lease_expires_at = $2,
-                 attempts = attempts + 1, started_at = $3
-             where match_id = (
-                 select m.match_id from match m
+        let next = match tournament {
+            // One tournament's matches (a local tournament): one lane, in order.
+            Some(_) => format!(
+                "select m.match_id from match m
                  join bot_version v on v.bot_version_id = m.bot_version_id
                  join bot b on b.bot_id = v.bot_id
                  where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready'
-                     and (cast($4 as bigint) is null or m.tournament_id = $4)
-                 order by m.priority, m.match_id limit 1 {lock})
+                     and m.tournament_id = $4
+                 order by m.match_id limit 1 {lock}"
+            ),
+            None => format!("{FAIR_ORDER} limit 1 {lock}"),
+        };
+        let id: Option<i64> = sqlx::query_scalar(&format!(
+            "update match set status = 'running', lease_owner = $1, lease_expires_at = $2,
+                 attempts = attempts + 1, started_at = $3
+             where match_id = ({next})
              returning match_id"
         ))
         .bind(owner)
@@ -309,6 +376,12 @@ impl Storage {
         .bind(tournament)
         .fetch_optional(self.pool())
         .await?;
+        if let (Some(id), None) = (id, tournament) {
+            sqlx::query(MARK_SERVED)
+                .bind(id)
+                .execute(self.pool())
+                .await?;
+        }
         drop(turn);
         let Some(id) = id else { return Ok(None) };
         Ok(sqlx::query_as(
@@ -686,7 +759,7 @@ mod tests {
     }
 
     #[tokio::test]
-    async fn single_matches_are_claimed_before_tournament_matches() {
+    async fn single_matches_are_claimed_first_when_neither_class_was_served() {
         for (db, _guard) in backends().await {
             let (v, z) = bot_and_maze(&db).await;
             let t = db.create_tournament("t", &[v], &[z], 2).await.unwrap();
@@ -704,6 +777,64 @@ mod tests {
                 .await
                 .unwrap();
             assert!(third.is_none());
+        }
+    }
+
+    #[tokio::test]
+    async fn a_flooding_owner_delays_another_owner_and_a_tournament_by_a_bounded_number() {
+        for (db, _guard) in backends().await {
+            let (flooder, z) = bot_and_maze(&db).await;
+            let honest = db
+                .create_bot(
+                    "honest",
+                    "another owner",
+                    &crate::storage::bots::NewVersion {
+                        command: "python3 b.py",
+                        dir: "/x",
+                        files_sha256: "s",
+                        file_count: 1,
+                        build_command: None,
+                        env: &[],
+                        bundle_sha256: None,
+                    },
+                )
+                .await
+                .unwrap()
+                .bot_version_id;
+            let t = db.create_tournament("t", &[honest], &[z], 6).await.unwrap();
+            for seed in 0..40 {
+                db.queue_match(flooder, z, seed).await.unwrap();
+            }
+            let mine = db.queue_match(honest, z, 99).await.unwrap();
+            let mut order = Vec::new();
+            while let Some(c) = db.claim_next("w", 60_000, None).await.unwrap() {
+                order.push(c);
+            }
+            assert_eq!(order.len(), 47);
+            // The honest owner's one match, queued after 40 of the flooder's and a
+            // tournament of 6: before it at most one match of the flooder's lane and one
+            // of the tournaments' class.
+            let at = order.iter().position(|c| c.match_id == mine).unwrap();
+            assert!(
+                at <= 3,
+                "the honest match came {}th: {:?}",
+                at + 1,
+                order
+                    .iter()
+                    .map(|c| (c.match_id, c.tournament_id))
+                    .collect::<Vec<_>>()
+            );
+            // The tournament gets every other claim while singles wait: all of its 6
+            // matches within the first 13.
+            let last_t = order
+                .iter()
+                .rposition(|c| c.tournament_id == Some(t.tournament_id))
+                .unwrap();
+            assert!(
+                last_t < 13,
+                "the tournament's last match came {}th",
+                last_t + 1
+            );
         }
     }
 

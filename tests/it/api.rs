@@ -678,6 +678,145 @@ async fn a_full_queue_answers_429_with_retry_after() {
     assert_error(s, &v, 429);
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_flooding_owner_neither_delays_another_owner_nor_the_ranking() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "1", "--max-queued-per-owner", "30"]);
+    // The flooder's bot takes a while each match (3 s to start), so its flood waits.
+    let slow = "import sys, time\ntime.sleep(0.3)\nsys.stdin.readline()\nfor line in sys.stdin:\n    \
+                print('{\"rotation\":0,\"movement\":0}', flush=True)\n";
+    let (flooder, flood_token) = register(
+        &server,
+        "flooder",
+        "python3 bot.py",
+        json!({"bot.py": slow}),
+    )
+    .await;
+    let (honest, honest_token) = register(
+        &server,
+        "honest",
+        "python3 simple_bot.py",
+        simple_bot_files(),
+    )
+    .await;
+    let queue = |bot: i64, token: String, seed: i64| {
+        let server = &server;
+        async move {
+            server
+                .call(
+                    Method::POST,
+                    "/api/matches",
+                    Some(json!({"bot_id": bot, "maze_id": 1, "seed": seed})),
+                    Some(&token),
+                )
+                .await
+        }
+    };
+    // Queued until refused: 30 waiting (one more may have started meanwhile).
+    let mut accepted = 0;
+    let (v, headers) = loop {
+        let (s, v, headers) = queue(flooder, flood_token.clone(), accepted).await;
+        if s != 202 {
+            assert_error(s, &v, 429);
+            break (v, headers);
+        }
+        accepted += 1;
+        assert!(accepted <= 32, "the owner's limit did not hold");
+    };
+    assert!((30..=32).contains(&accepted), "{accepted}");
+    // Past its share: 429 naming whose limit, how many wait, and when to retry.
+    let msg = v["error"]["message"].as_str().unwrap();
+    assert!(
+        msg.contains(&format!("owner of bot {flooder}")) && msg.contains("(30)"),
+        "{msg}"
+    );
+    assert!(headers.get("retry-after").is_some());
+    // The admin's tournament and the honest owner's match, queued behind the flood.
+    let (s, t) = server
+        .post(
+            "/api/tournaments",
+            json!({"name": "ranking", "bot_ids": [honest], "maze_ids": [1, 2], "repeats": 2}),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{t}");
+    let (s, mine, _) = queue(honest, honest_token.clone(), 7).await;
+    assert_eq!(s, 202, "{mine}");
+    let mine = mine["match_id"].as_i64().unwrap();
+    let done = wait_match(&server, mine).await;
+    assert_eq!(done["status"], "finished", "{done}");
+    // The flooder's matches started after the honest one was queued and before it
+    // started: at most one (its lane's turn).
+    let (_, all) = server.get("/api/matches?limit=200", Some(ADMIN)).await;
+    let (queued_at, started) = (
+        done["created_at"].as_i64().unwrap(),
+        done["started_at"].as_i64().unwrap(),
+    );
+    let flood_before = all["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["bot_id"] == flooder)
+        .filter(|m| {
+            m["started_at"]
+                .as_i64()
+                .is_some_and(|s| s >= queued_at && s < started)
+        })
+        .count();
+    assert!(
+        flood_before <= 1,
+        "{flood_before} of the flooder's matches started between the honest one's queueing and start"
+    );
+    // The tournament finishes while the flood still waits.
+    let tid = t["tournament_id"].as_i64().unwrap();
+    let tv = wait_tournament(&server, tid, Duration::from_secs(120)).await;
+    assert_eq!(tv["done"], tv["total"], "{tv}");
+    let (_, queued) = server
+        .get(
+            &format!("/api/matches?bot_id={flooder}&status=queued"),
+            None,
+        )
+        .await;
+    assert!(
+        queued["total"].as_i64() > Some(0),
+        "the flood was played before the tournament ended: the test proves nothing"
+    );
+}
+
+#[tokio::test]
+async fn registrations_are_limited_per_address_but_not_for_the_admin() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--registrations-per-hour", "3"]);
+    for i in 0..3 {
+        register(
+            &server,
+            &format!("b{i}"),
+            "python3 simple_bot.py",
+            simple_bot_files(),
+        )
+        .await;
+    }
+    let body =
+        json!({"name": "b3", "command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (s, v, headers) = server
+        .call(Method::POST, "/api/bots", Some(body.clone()), None)
+        .await;
+    assert_error(s, &v, 429);
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("127.0.0.1"),
+        "{v}"
+    );
+    let wait: u64 = headers["retry-after"].to_str().unwrap().parse().unwrap();
+    assert!((1..=1200).contains(&wait), "{wait}");
+    let (s, v, _) = server
+        .call(Method::POST, "/api/bots", Some(body), Some(ADMIN))
+        .await;
+    assert_eq!(s, 201, "{v}");
+}
+
 #[tokio::test]
 async fn the_openapi_document_lists_every_route() {
     let dir = tempfile::tempdir().unwrap();

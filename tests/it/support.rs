@@ -206,6 +206,8 @@ impl TestServer {
             .args(extra)
             .env("MAZEARENA_ADMIN_TOKEN", ADMIN)
             .env("MAZEARENA_SANDBOX", sandbox().level())
+            // Tests register many bots from one address; the limit has a test of its own.
+            .env("MAZEARENA_REGISTRATIONS_PER_HOUR", "10000")
             .envs(env.iter().copied())
             .current_dir(root())
             .stdout(std::process::Stdio::piped())

@@ -183,7 +183,34 @@ pub struct BotDetail {
     pub versions: Vec<VersionView>,
 }
 
-/// Register a bot with its files; answers its id and owner token.
+/// Refuses an anonymous registration past the limit of its client address (429 with
+/// Retry-After): a registration is free, and each gives a new owner token.
+fn check_registration_rate(state: &AppState, caller: &Caller, request: &Request) -> ApiResult<()> {
+    let (Some(limiter), false) = (&state.settings.registrations, caller.is_admin()) else {
+        return Ok(());
+    };
+    let Some(axum::extract::ConnectInfo(addr)) = request
+        .extensions()
+        .get::<axum::extract::ConnectInfo<std::net::SocketAddr>>()
+    else {
+        return Ok(());
+    };
+    limiter.check_key(&addr.ip()).map_err(|not_until| {
+        use governor::clock::Clock;
+        let wait = not_until.wait_time_from(governor::clock::DefaultClock::default().now());
+        ApiError::TooManyRequests {
+            message: format!(
+                "{} has registered as many bots as it may this hour; try again in {} s",
+                addr.ip(),
+                wait.as_secs() + 1
+            ),
+            retry_after_secs: wait.as_secs() + 1,
+        }
+    })
+}
+
+/// Register a bot with its files; answers its id and owner token (anonymous
+/// registrations are limited per client address: 429 with Retry-After).
 #[utoipa::path(post, path = "/api/bots", tag = "bots",
     request_body(content(
         (BotUpload = "application/json"),
@@ -193,11 +220,14 @@ pub struct BotDetail {
         (status = 201, body = BotCreated),
         (status = 400, body = ErrorBody), (status = 409, body = ErrorBody),
         (status = 413, body = ErrorBody), (status = 422, body = ErrorBody),
+        (status = 429, body = ErrorBody, description = "too many registrations from this address; see Retry-After"),
     ))]
 async fn create_bot(
     State(state): State<AppState>,
+    caller: Caller,
     request: Request,
 ) -> ApiResult<(StatusCode, axum::Json<BotCreated>)> {
+    check_registration_rate(&state, &caller, &request)?;
     let (name, submission) = read_upload(&state, request).await?.submission()?;
     let name = name.ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
     let registered =
