@@ -26,7 +26,7 @@ pub const EXCERPT_BYTES: usize = 200;
 pub const MAX_DEBUG_STEP_BYTES: usize = 16 * 1024;
 
 /// The most `debug` bytes a whole match keeps; later steps' debug objects are dropped.
-pub const MAX_DEBUG_MATCH_BYTES: usize = 512 * 1024;
+pub const MAX_DEBUG_MATCH_BYTES: usize = 64 * 1024;
 
 /// A message from the server to the bot, one JSON object per line.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -196,6 +196,20 @@ async fn create_match(
     }
     check_capacity(&state, 1).await?;
     if !caller.is_admin() {
+        if let Some(cap) = state.settings.max_stored_bytes_per_owner {
+            let stored = state.storage.stored_bytes_of_owner_of(bot.bot_id).await?;
+            if stored >= cap {
+                return Err(ApiError::Conflict(format!(
+                    "the owner of bot {} has {:.2} MiB of stored matches, its cap ({:.2} MiB): \
+                     new matches are refused until old practice matches' traces are \
+                     removed (`mazearena prune`, or the server's \
+                     --prune-practice-after-days)",
+                    bot.bot_id,
+                    stored as f64 / 1_048_576.0,
+                    cap as f64 / 1_048_576.0
+                )));
+            }
+        }
         let waiting = state.storage.queued_for_owner_of(bot.bot_id).await?;
         let limit = state.settings.max_queued_per_owner;
         if waiting >= limit {
@@ -337,17 +351,23 @@ async fn get_match_replay(
             _ => ApiError::Forbidden(msg),
         });
     }
-    let record = state
-        .storage
-        .get_record(id)
-        .await?
-        .filter(|r| !r.trace.is_empty() || row.total_steps.is_some())
-        .ok_or_else(|| {
-            ApiError::Conflict(format!(
+    let played_steps = row.total_steps.is_some_and(|n| n > 0);
+    let record = match state.storage.get_record(id).await? {
+        Some(r) if !r.trace.is_empty() || (row.total_steps.is_some() && !played_steps) => r,
+        // Played, but its trace is gone: pruned.
+        _ if played_steps => {
+            return Err(ApiError::Conflict(format!(
+                "the trace of match {id} was removed to save space (an old practice match); \
+                 GET /api/matches/{id} still has its result"
+            )));
+        }
+        _ => {
+            return Err(ApiError::Conflict(format!(
                 "match {id} has not been played yet ({})",
                 row.status
-            ))
-        })?;
+            )));
+        }
+    };
     // The bot's stderr is its owner's: left out for everyone else, public maze or not.
     let stderr_shown = caller.owns(&state, row.bot_id).await?;
     let record = if stderr_shown {

@@ -59,6 +59,9 @@ pub struct Settings {
     pub sandbox_level: &'static str,
     /// The most matches one owner may have waiting in the queue (the admin: no limit).
     pub max_queued_per_owner: i64,
+    /// The most bytes of stored match records one owner may have before its new matches
+    /// are refused (`None`: no cap; the admin: no cap).
+    pub max_stored_bytes_per_owner: Option<i64>,
     /// Bots registered per hour from one client address, anonymous registrations only
     /// (`None`: no limit).
     pub registrations: Option<Arc<RegistrationLimiter>>,

@@ -3,6 +3,7 @@
 
 mod matches;
 mod maze;
+mod prune;
 mod replay;
 mod report;
 mod run;
@@ -48,6 +49,8 @@ pub enum Command {
     /// Stored matches: `match show ID` prints one, with its reason and stderr tail.
     #[command(subcommand)]
     Match(matches::MatchCommand),
+    /// Remove the stored traces of old practice matches (their results stay).
+    Prune(prune::PruneArgs),
 }
 
 /// A step of the sandbox, when this process was started as `mazearena sandbox-exec ...`
@@ -82,6 +85,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Doctor(args) => sandbox::doctor(args),
         Command::Replay(args) => replay::run(args),
         Command::Match(cmd) => matches::run(cmd),
+        Command::Prune(args) => prune::run(args),
     }
 }
 

@@ -67,6 +67,19 @@ pub struct ServeArgs {
     /// token (0: no limit); more are refused with 429 and Retry-After.
     #[arg(long, env = "MAZEARENA_REGISTRATIONS_PER_HOUR", default_value_t = 20)]
     registrations_per_hour: u32,
+    /// The most MiB of stored match records (compressed traces) one owner may have;
+    /// past it, its new matches are refused until old ones are pruned (0: no cap).
+    #[arg(
+        long,
+        env = "MAZEARENA_MAX_STORED_MIB_PER_OWNER",
+        default_value_t = 256.0
+    )]
+    max_stored_mib_per_owner: f64,
+    /// Remove the stored traces (steps, stderr, debug drawings) of practice matches
+    /// (not in a tournament) once they ended this many days ago, checked every hour;
+    /// their results and every standing stay (0: keep them all).
+    #[arg(long, env = "MAZEARENA_PRUNE_PRACTICE_AFTER_DAYS", default_value_t = 0)]
+    prune_practice_after_days: u32,
     /// The most connections open at once; a client over it is closed at once.
     #[arg(long, env = "MAZEARENA_MAX_CONNECTIONS", default_value_t = 4096,
           value_parser = clap::value_parser!(u32).range(1..))]
@@ -230,6 +243,8 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             max_queue: args.max_queue,
             sandbox_level: sandbox.level(),
             max_queued_per_owner: args.max_queued_per_owner,
+            max_stored_bytes_per_owner: (args.max_stored_mib_per_owner > 0.0)
+                .then_some((args.max_stored_mib_per_owner * 1_048_576.0) as i64),
             registrations: api::registration_limiter(args.registrations_per_hour),
         }),
         metrics: metrics.clone(),
@@ -265,6 +280,24 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     };
     tracker.close();
 
+    if args.prune_practice_after_days > 0 {
+        let storage = storage.clone();
+        let days = i64::from(args.prune_practice_after_days);
+        tokio::spawn(async move {
+            let mut hourly = tokio::time::interval(Duration::from_secs(3600));
+            loop {
+                hourly.tick().await;
+                let before = crate::storage::now_ms() - days * super::prune::DAY_MS;
+                match storage.prune_practice_records(before).await {
+                    Ok((0, _)) => {}
+                    Ok((count, bytes)) => {
+                        tracing::info!(count, bytes, "removed the traces of old practice matches")
+                    }
+                    Err(e) => tracing::warn!(error = %e, "cannot prune old practice matches"),
+                }
+            }
+        });
+    }
     let stop = shutdown.stop_claiming.clone();
     tokio::spawn(async move {
         wait_for_signal().await;

@@ -11,8 +11,14 @@ use crate::protocol::MAX_LINE_BYTES;
 pub const STDERR_TAIL_BYTES: usize = 64 * 1024;
 
 /// The most stderr bytes of a match that are also kept line by line in the trace (each
-/// line with the step it was written during); the tail has the rest.
-pub const STDERR_TRACE_BYTES: usize = 256 * 1024;
+/// line with the step it was written during); past them one line says so, and the
+/// tail has the rest.
+pub const STDERR_TRACE_BYTES: usize = 64 * 1024;
+
+/// The line that ends a match's stderr lines in the trace once they reach
+/// [`STDERR_TRACE_BYTES`].
+pub const STDERR_TRACE_FULL: &str =
+    "[mazearena: the match's stderr lines reached 64 KiB; later lines are only in the stderr tail]";
 
 /// The most stderr lines one step of the trace keeps.
 pub const STDERR_STEP_LINES: usize = 50;
@@ -121,6 +127,8 @@ struct LineSplitter {
     echo: bool,
     partial: Vec<u8>,
     sent: usize,
+    /// Whether [`STDERR_TRACE_FULL`] was added.
+    cut: bool,
 }
 
 impl LineSplitter {
@@ -130,6 +138,7 @@ impl LineSplitter {
             echo,
             partial: Vec::new(),
             sent: 0,
+            cut: false,
         }
     }
 
@@ -153,6 +162,9 @@ impl LineSplitter {
         if self.sent < STDERR_TRACE_BYTES {
             self.sent += text.len() + 1;
             self.lines.push(text);
+        } else if !self.cut {
+            self.cut = true;
+            self.lines.push(STDERR_TRACE_FULL.to_string());
         }
     }
 
@@ -240,6 +252,29 @@ impl Tail {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_matchs_stderr_lines_stop_at_their_budget_with_one_line_saying_so() {
+        let mut split = LineSplitter::new(false);
+        let line = format!("{}\n", "x".repeat(99));
+        for _ in 0..(STDERR_TRACE_BYTES / 100 + 50) {
+            split.push(line.as_bytes());
+        }
+        let kept: usize = split.lines.iter().map(|l| l.len() + 1).sum();
+        assert!(kept <= STDERR_TRACE_BYTES + 200, "{kept}");
+        assert_eq!(
+            split.lines.last().map(String::as_str),
+            Some(STDERR_TRACE_FULL)
+        );
+        assert_eq!(
+            split
+                .lines
+                .iter()
+                .filter(|l| *l == STDERR_TRACE_FULL)
+                .count(),
+            1
+        );
+    }
     use futures_util::StreamExt;
 
     #[tokio::test]

@@ -315,6 +315,54 @@ impl Storage {
         )
     }
 
+    /// Removes the stored records (trace, stderr, debug drawing) of the practice
+    /// matches (single matches, not in a tournament) that ended before `before_ms`,
+    /// keeping their rows: status, score, steps and summary stay, and so does every
+    /// standing (kept from the rows). Returns how many records and compressed bytes went.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn prune_practice_records(&self, before_ms: i64) -> Result<(i64, i64)> {
+        let _turn = self.write_turn().await;
+        let mut tx = self.pool().begin().await?;
+        let (count, bytes): (i64, Option<i64>) = sqlx::query_as(
+            "select count(*), cast(sum(length(r.data)) as bigint) from match_record r
+             join match m on m.match_id = r.match_id
+             where m.tournament_id is null and m.finished_at < $1",
+        )
+        .bind(before_ms)
+        .fetch_one(&mut *tx)
+        .await?;
+        sqlx::query(
+            "delete from match_record where match_id in (
+                 select m.match_id from match m
+                 where m.tournament_id is null and m.finished_at < $1)",
+        )
+        .bind(before_ms)
+        .execute(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        Ok((count, bytes.unwrap_or(0)))
+    }
+
+    /// The compressed bytes of the stored records of every match of the owner of bot
+    /// `bot_id` (its owner token, over every bot registered with it).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn stored_bytes_of_owner_of(&self, bot_id: i64) -> Result<i64> {
+        let bytes: Option<i64> = sqlx::query_scalar(
+            "select cast(sum(length(r.data)) as bigint) from match_record r
+             join match m on m.match_id = r.match_id
+             join bot b on b.bot_id = m.bot_id
+             where b.owner_token_hash = (select owner_token_hash from bot where bot_id = $1)",
+        )
+        .bind(bot_id)
+        .fetch_one(self.pool())
+        .await?;
+        Ok(bytes.unwrap_or(0))
+    }
+
     /// How many matches of the owner of bot `bot_id` (its owner token, over every bot
     /// registered with it) are waiting in the queue.
     ///
@@ -835,6 +883,66 @@ mod tests {
                 "the tournament's last match came {}th",
                 last_t + 1
             );
+        }
+    }
+
+    #[tokio::test]
+    async fn pruning_old_practice_records_keeps_rows_and_every_standing() {
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            let t = db.create_tournament("t", &[v], &[z], 1).await.unwrap();
+            let single = db.queue_match(v, z, 3).await.unwrap();
+            while let Some(c) = db.claim_next("w", 60_000, None).await.unwrap() {
+                let status = if c.match_id == single {
+                    MatchStatus::Finished
+                } else {
+                    MatchStatus::Timeout
+                };
+                let mut r = record(status);
+                r.stderr_tail = "kept until pruned".into();
+                assert!(
+                    db.complete_match(c.match_id, "w", &r, &maze())
+                        .await
+                        .unwrap()
+                );
+            }
+            let boards = || async {
+                let mut all = Vec::new();
+                for scope in [
+                    Scope::All,
+                    Scope::Ranking,
+                    Scope::Tournament(t.tournament_id),
+                ] {
+                    all.push(format!("{:?}", db.leaderboard(scope).await.unwrap()));
+                }
+                all
+            };
+            let before = boards().await;
+            let row_before = db.get_match(single).await.unwrap().unwrap();
+            assert_eq!(
+                db.get_record(single).await.unwrap().unwrap().stderr_tail,
+                "kept until pruned"
+            );
+            // Nothing is old enough yet.
+            assert_eq!(db.prune_practice_records(0).await.unwrap().0, 0);
+            let (count, bytes) = db.prune_practice_records(i64::MAX).await.unwrap();
+            assert_eq!(count, 1, "only the practice match's record goes");
+            assert!(bytes > 0);
+            assert_eq!(boards().await, before, "a standing changed");
+            assert_eq!(db.get_match(single).await.unwrap().unwrap(), row_before);
+            let left = db.get_record(single).await.unwrap();
+            assert!(
+                left.as_ref().is_none_or(|r| r.stderr_tail.is_empty()),
+                "{left:?}"
+            );
+            // The tournament's match keeps its record.
+            let tm = db
+                .tournament_matches(t.tournament_id)
+                .await
+                .unwrap()
+                .remove(0)
+                .match_id;
+            assert!(db.get_record(tm).await.unwrap().is_some());
         }
     }
 

@@ -635,3 +635,136 @@ async fn a_local_tournament_on_a_servers_database_never_changes_an_uploaded_bot(
     assert_eq!(v["versions"].as_array().map(Vec::len), Some(1), "{v}");
     assert_eq!(v["versions"][0]["command"], "python3 simple_bot.py", "{v}");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn prune_removes_old_practice_traces_and_leaves_every_result_and_standing() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = crate::support::TestServer::start(dir.path(), &["--jobs", "1"]);
+    let (bot, token) = crate::support::register(
+        &server,
+        "simple",
+        "python3 simple_bot.py",
+        crate::support::simple_bot_files(),
+    )
+    .await;
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            serde_json::json!({"bot_id": bot, "maze_id": 1, "seed": 2}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    let id = q["match_id"].as_i64().unwrap();
+    let played = crate::support::wait_match(&server, id).await;
+    let (s, replay) = server.get(&format!("/api/matches/{id}/replay"), None).await;
+    assert_eq!(s, 200, "{replay}");
+    let boards = || async {
+        let mut all = Vec::new();
+        for scope in ["ranking", "all"] {
+            all.push(
+                server
+                    .get(
+                        &format!("/api/leaderboard?scope={scope}"),
+                        Some(crate::support::ADMIN),
+                    )
+                    .await
+                    .1,
+            );
+        }
+        all
+    };
+    let before = boards().await;
+    let out = mazearena(&[
+        "prune",
+        "--database",
+        &server.database,
+        "--older-than-days",
+        "0",
+    ]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        said.contains("removed the traces of 1 practice match "),
+        "{said}"
+    );
+    assert_eq!(boards().await, before, "a standing changed");
+    let (_, after) = server.get(&format!("/api/matches/{id}"), None).await;
+    for key in ["status", "score", "run0_steps", "run1_steps", "total_steps"] {
+        assert_eq!(after[key], played[key], "{key}");
+    }
+    let (s, gone) = server.get(&format!("/api/matches/{id}/replay"), None).await;
+    assert_eq!(s, 409, "{gone}");
+    assert!(
+        gone["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("removed"),
+        "{gone}"
+    );
+    let (s, page) = server.get_text(&format!("/matches/{id}")).await;
+    assert_eq!(s, 200);
+    assert!(page.contains("replay was removed"), "the page says why");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_owner_over_its_storage_cap_queues_nothing_until_pruned() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = crate::support::TestServer::start(
+        dir.path(),
+        &["--jobs", "1", "--max-stored-mib-per-owner", "0.01"],
+    );
+    // 60 KiB of stderr that does not compress, then it quits: over 10 KiB stored.
+    let noisy = "import os, sys\nsys.stdin.readline()\nsys.stdin.readline()\n\
+                 sys.stderr.write(os.urandom(30000).hex())\nsys.stderr.flush()\n";
+    let (bot, token) = crate::support::register(
+        &server,
+        "noisy",
+        "python3 bot.py",
+        serde_json::json!({"bot.py": noisy}),
+    )
+    .await;
+    let queue = || async {
+        server
+            .post(
+                "/api/matches",
+                serde_json::json!({"bot_id": bot, "maze_id": 1}),
+                Some(&token),
+            )
+            .await
+    };
+    let (s, q) = queue().await;
+    assert_eq!(s, 202, "{q}");
+    crate::support::wait_match(&server, q["match_id"].as_i64().unwrap()).await;
+    let (s, refused) = queue().await;
+    assert_eq!(s, 409, "{refused}");
+    let msg = refused["error"]["message"].as_str().unwrap();
+    assert!(
+        msg.contains(&format!("owner of bot {bot}")) && msg.contains("cap"),
+        "{msg}"
+    );
+    // The admin is not held to it; and once pruned, the owner queues again.
+    let (s, by_admin) = server
+        .post(
+            "/api/matches",
+            serde_json::json!({"bot_id": bot, "maze_id": 1}),
+            Some(crate::support::ADMIN),
+        )
+        .await;
+    assert_eq!(s, 202, "{by_admin}");
+    crate::support::wait_match(&server, by_admin["match_id"].as_i64().unwrap()).await;
+    let out = mazearena(&[
+        "prune",
+        "--database",
+        &server.database,
+        "--older-than-days",
+        "0",
+    ]);
+    assert!(out.status.success());
+    let (s, q) = queue().await;
+    assert_eq!(s, 202, "{q}");
+}

@@ -209,8 +209,11 @@ async fn match_page(
     };
     // Pages never use a token: the bot's stderr (its owner's) is left out, and the
     // page's owner form fetches it from the API with the pasted token.
+    let pruned = !hidden
+        && row.total_steps.is_some_and(|n| n > 0)
+        && stored.as_ref().is_none_or(|r| r.trace.is_empty());
     if let Some(mut r) = stored
-        .filter(|_| row.total_steps.is_some())
+        .filter(|_| row.total_steps.is_some() && !pruned)
         .map(MatchRecord::without_stderr)
     {
         let m = super::mazes::find_maze(&state, row.maze_id).await?;
@@ -227,7 +230,11 @@ async fn match_page(
         stderr_hidden: true,
         ..ViewerData::new(title, r, maze.as_ref(), format!("match-{id}.json"))
     });
-    Ok(Html(web::match_page(&web::MatchPage { line, viewer })))
+    Ok(Html(web::match_page(&web::MatchPage {
+        line,
+        viewer,
+        pruned,
+    })))
 }
 
 /// Query of `/tournaments`.

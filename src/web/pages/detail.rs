@@ -111,6 +111,8 @@ pub struct MatchPage<'a> {
     pub line: MatchLine,
     /// The viewer's data, when the visitor may see the replay (not on hidden mazes).
     pub viewer: Option<ViewerData<'a>>,
+    /// True when its trace was removed (an old practice match, pruned).
+    pub pruned: bool,
 }
 
 /// A match's page: its result, and the replay viewer.
@@ -149,6 +151,8 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
             None => {
                 @if r.maze_hidden {
                     p.muted { "Played on a hidden ranking maze: its replay is not shown." }
+                } @else if p.pruned {
+                    p.muted { "Its replay was removed to save space (an old practice match); its result stays." }
                 } @else {
                     p.muted { "Not played yet." }
                 }
