@@ -1414,12 +1414,10 @@ async fn a_bot_encoding_a_hidden_maze_in_its_step_count_leaks_nothing_per_match(
     let server = TestServer::start(dir.path(), &["--jobs", "2"]);
     // The attack: map what it can, then crash at a step that encodes it (here: the
     // readings of its first steps and its seed, so every match ends at another step).
-    let encoder = "import json, sys\nsteps = 0\nstart = json.loads(sys.stdin.readline())\n\
-                   code = 0\nfor line in sys.stdin:\n    m = json.loads(line)\n    \
-                   if m.get('type') != 'sense':\n        break\n    steps += 1\n    \
-                   code = code * 3 + sum(m['sensors']) % 3\n    \
-                   if steps >= 4 + (code + start.get('seed', 0)) % 40:\n        sys.exit(0)\n    \
-                   print(json.dumps({'rotation': 90, 'movement': 1}), flush=True)\n";
+    let encoder = std::fs::read_to_string(
+        crate::support::root().join("tests/fixtures/bots/hostile/encode_steps.py"),
+    )
+    .unwrap();
     let (bot, token) = register(
         &server,
         "encoder",
