@@ -836,15 +836,7 @@ mod tests {
                 .create_bot(
                     "honest",
                     "another owner",
-                    &crate::storage::bots::NewVersion {
-                        command: "python3 b.py",
-                        dir: "/x",
-                        files_sha256: "s",
-                        file_count: 1,
-                        build_command: None,
-                        env: &[],
-                        bundle_sha256: None,
-                    },
+                    &crate::storage::test_support::plain_version(),
                 )
                 .await
                 .unwrap()

@@ -472,6 +472,19 @@ pub(crate) mod test_support {
     use super::Storage;
     use super::bots::NewVersion;
 
+    /// A version from a local folder, ready to play.
+    pub fn plain_version() -> NewVersion<'static> {
+        NewVersion {
+            command: "python3 b.py",
+            dir: "/x",
+            files_sha256: "s",
+            file_count: 1,
+            build_command: None,
+            env: &[],
+            bundle_sha256: None,
+        }
+    }
+
     /// A version with a build command (`make`), its files not stored.
     pub fn with_build() -> NewVersion<'static> {
         NewVersion {
@@ -544,22 +557,7 @@ pub(crate) mod test_support {
     /// A bot "b" (owner token hash "h") with one version, and a public 2x2 maze "m":
     /// the version's and the maze's ids.
     pub async fn bot_and_maze(db: &Storage) -> (i64, i64) {
-        let v = db
-            .create_bot(
-                "b",
-                "h",
-                &crate::storage::bots::NewVersion {
-                    command: "python3 b.py",
-                    dir: "/x",
-                    files_sha256: "s",
-                    file_count: 1,
-                    build_command: None,
-                    env: &[],
-                    bundle_sha256: None,
-                },
-            )
-            .await
-            .unwrap();
+        let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
         let z = db
             .insert_maze(&crate::storage::mazes::NewMaze {
                 name: "m",

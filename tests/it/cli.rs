@@ -647,15 +647,7 @@ async fn prune_removes_old_practice_traces_and_leaves_every_result_and_standing(
         crate::support::simple_bot_files(),
     )
     .await;
-    let (s, q) = server
-        .post(
-            "/api/matches",
-            serde_json::json!({"bot_id": bot, "maze_id": 1, "seed": 2}),
-            Some(&token),
-        )
-        .await;
-    assert_eq!(s, 202, "{q}");
-    let id = q["match_id"].as_i64().unwrap();
+    let id = crate::support::queue(&server, bot, 1, 2, &token).await;
     let played = crate::support::wait_match(&server, id).await;
     let (s, replay) = server.get(&format!("/api/matches/{id}/replay"), None).await;
     assert_eq!(s, 200, "{replay}");

@@ -180,15 +180,7 @@ async fn queue_on_a_public_maze(server: &TestServer, bot: i64, token: &str) -> i
         )
         .await;
     assert_eq!(s, 201, "{v}");
-    let (s, q) = server
-        .post(
-            "/api/matches",
-            json!({"bot_id": bot, "maze_id": v["maze_id"], "seed": 1}),
-            Some(token),
-        )
-        .await;
-    assert_eq!(s, 202, "{q}");
-    q["match_id"].as_i64().unwrap()
+    crate::support::queue(server, bot, v["maze_id"].as_i64().unwrap(), 1, token).await
 }
 
 /// A home folder with `bin/` (to put on PATH) and a planted `.ssh/id_rsa`.

@@ -503,15 +503,7 @@ async fn every_page_runs_only_its_own_scripts_and_styles_and_cannot_be_framed() 
         simple_bot_files(),
     )
     .await;
-    let (s, q) = server
-        .post(
-            "/api/matches",
-            json!({"bot_id": bot, "maze_id": 1, "seed": 1}),
-            Some(&token),
-        )
-        .await;
-    assert_eq!(s, 202, "{q}");
-    let id = q["match_id"].as_i64().unwrap();
+    let id = crate::support::queue(&server, bot, 1, 1, &token).await;
     wait_match(&server, id).await;
     let (s, t) = server
         .post(

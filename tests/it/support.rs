@@ -373,6 +373,20 @@ pub async fn upload(server: &TestServer, body: Value) -> (i64, String) {
     )
 }
 
+/// Queues a match of bot `bot` on maze `maze` with `seed` as the holder of `token`,
+/// which must be accepted (202); returns its id.
+pub async fn queue(server: &TestServer, bot: i64, maze: i64, seed: i64, token: &str) -> i64 {
+    let (s, q) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot, "maze_id": maze, "seed": seed}),
+            Some(token),
+        )
+        .await;
+    assert_eq!(s, 202, "{q}");
+    q["match_id"].as_i64().unwrap()
+}
+
 /// The whole build log of bot `bot`'s first version, read with its owner's `token`.
 pub async fn build_log(server: &TestServer, bot: i64, token: &str) -> String {
     let (_, log) = server

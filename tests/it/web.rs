@@ -251,15 +251,7 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
         json!({"bot.py": chatty}),
     )
     .await;
-    let (s, q) = server
-        .post(
-            "/api/matches",
-            json!({"bot_id": talker, "maze_id": 1, "seed": 1}),
-            Some(&talker_token),
-        )
-        .await;
-    assert_eq!(s, 202, "{q}");
-    let tm = q["match_id"].as_i64().unwrap();
+    let tm = crate::support::queue(&server, talker, 1, 1, &talker_token).await;
     crate::support::wait_match(&server, tm).await;
     let (_, anon) = server.get(&format!("/api/matches/{tm}/replay"), None).await;
     assert_eq!(anon["stderr_shown"], false);
