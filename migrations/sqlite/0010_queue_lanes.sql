@@ -8,3 +8,8 @@ create table queue_lane (
     lane text primary key,
     served bigint not null
 );
+
+-- The waiting single matches (a few per owner, however many tournament matches wait),
+-- for finding each owner's first one without reading the whole queue.
+create index match_waiting_single on match (bot_id, match_id)
+    where status = 'queued' and tournament_id is null;

@@ -119,19 +119,28 @@ impl MatchRow {
 /// after at most one match of each other owner's lane and as many tournament matches,
 /// however much anyone queues.
 const FAIR_ORDER: &str = "
-    with ready as (
-        select m.match_id,
-            case when m.tournament_id is null then 'o:' || b.owner_token_hash
-                else 't:' || cast(m.tournament_id as text) end as lane,
-            case when m.tournament_id is null then 'class:s' else 'class:t' end as class
+    with heads as (
+        -- Single matches: each owner's first ready one (a partial index holds only the
+        -- waiting single matches, a few per owner).
+        select 'o:' || b.owner_token_hash as lane, 'class:s' as class,
+            min(m.match_id) as match_id
         from match m
         join bot_version v on v.bot_version_id = m.bot_version_id
         join bot b on b.bot_id = v.bot_id
-        where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready'
-            and (cast($4 as bigint) is null or m.tournament_id = $4)
-    ),
-    heads as (
-        select lane, class, min(match_id) as match_id from ready group by lane, class
+        where m.status = 'queued' and m.tournament_id is null
+            and b.paused_at is null and v.build_status = 'ready'
+            and cast($4 as bigint) is null
+        group by b.owner_token_hash
+        union all
+        -- Tournaments: each one's first ready waiting match (an index seek each).
+        select 't:' || cast(t.tournament_id as text), 'class:t',
+            (select m.match_id from match m
+             join bot_version v on v.bot_version_id = m.bot_version_id
+             join bot b on b.bot_id = v.bot_id
+             where m.tournament_id = t.tournament_id and m.status = 'queued'
+                 and b.paused_at is null and v.build_status = 'ready'
+             order by m.match_id limit 1)
+        from tournament t
     )
     select m.match_id from heads h
     join match m on m.match_id = h.match_id
