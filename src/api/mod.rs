@@ -8,6 +8,7 @@
 pub mod auth;
 pub mod bots;
 pub mod connections;
+pub mod entrants;
 pub mod error;
 pub mod leaderboard;
 pub mod lists;
@@ -71,6 +72,36 @@ pub struct Settings {
 /// server's memory.
 pub type RegistrationLimiter = governor::DefaultKeyedRateLimiter<std::net::IpAddr>;
 
+/// Refuses a registration (of a bot or an entrant) by anyone but the admin past the
+/// limit of its client address `client` (429 with Retry-After): a registration is free,
+/// and each gives a new token.
+///
+/// # Errors
+/// The limit is reached.
+pub(crate) fn check_registration_rate(
+    state: &AppState,
+    caller: &auth::Caller,
+    client: Option<std::net::SocketAddr>,
+) -> error::ApiResult<()> {
+    let (Some(limiter), false, Some(addr)) =
+        (&state.settings.registrations, caller.is_admin(), client)
+    else {
+        return Ok(());
+    };
+    limiter.check_key(&addr.ip()).map_err(|not_until| {
+        use governor::clock::Clock;
+        let wait = not_until.wait_time_from(governor::clock::DefaultClock::default().now());
+        error::ApiError::TooManyRequests {
+            message: format!(
+                "{} has registered as much as it may this hour; try again in {} s",
+                addr.ip(),
+                wait.as_secs() + 1
+            ),
+            retry_after_secs: wait.as_secs() + 1,
+        }
+    })
+}
+
 /// A limiter of `per_hour` registrations per address (`None` for 0: no limit).
 pub fn registration_limiter(per_hour: u32) -> Option<Arc<RegistrationLimiter>> {
     let n = std::num::NonZeroU32::new(per_hour)?;
@@ -120,6 +151,7 @@ pub fn openapi() -> &'static utoipa::openapi::OpenApi {
 pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
     let (router, mut doc) = OpenApiRouter::with_openapi(ApiDoc::openapi())
         .merge(bots::router())
+        .merge(entrants::router())
         .merge(mazes::router())
         .merge(matches::router())
         .merge(tournaments::router())

@@ -277,13 +277,16 @@ impl Storage {
         )
     }
 
-    /// Whether `token_hash` is the owner token hash of `bot_id`.
+    /// Whether `token_hash` is the hash of `bot_id`'s owner token or of the key of the
+    /// entrant it belongs to.
     ///
     /// # Errors
     /// Database failures.
     pub async fn is_bot_owner(&self, bot_id: i64, token_hash: &str) -> Result<bool> {
+        // The bot's own owner token, or the key of the entrant it belongs to.
         let found: Option<i64> = sqlx::query_scalar(
-            "select bot_id from bot where bot_id = $1 and owner_token_hash = $2",
+            "select b.bot_id from bot b left join entrant e on e.entrant_id = b.entrant_id
+             where b.bot_id = $1 and (b.owner_token_hash = $2 or e.key_hash = $2)",
         )
         .bind(bot_id)
         .bind(token_hash)

@@ -122,7 +122,8 @@ const FAIR_ORDER: &str = "
     with heads as (
         -- Single matches: each owner's first ready one (a partial index holds only the
         -- waiting single matches, a few per owner).
-        select 'o:' || b.owner_token_hash as lane, 'class:s' as class,
+        select coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash) as lane,
+            'class:s' as class,
             min(m.match_id) as match_id
         from match m
         join bot_version v on v.bot_version_id = m.bot_version_id
@@ -130,7 +131,7 @@ const FAIR_ORDER: &str = "
         where m.status = 'queued' and m.tournament_id is null
             and b.paused_at is null and v.build_status = 'ready'
             and cast($4 as bigint) is null
-        group by b.owner_token_hash
+        group by coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash)
         union all
         -- Tournaments: each one's first ready waiting match (an index seek each).
         select 't:' || cast(t.tournament_id as text), 'class:t',
@@ -149,12 +150,21 @@ const FAIR_ORDER: &str = "
     where m.status = 'queued'
     order by coalesce(c.served, 0), h.class, coalesce(l.served, 0), h.match_id";
 
+/// Bot `b` has the same owner as bot `$1`: the same entrant, or (for bots of no
+/// entrant) the same owner token.
+const SAME_OWNER: &str = "b.bot_id in (
+    select o.bot_id from bot o, bot x where x.bot_id = $1 and (
+        (x.entrant_id is not null and o.entrant_id = x.entrant_id)
+        or (x.entrant_id is null and o.entrant_id is null
+            and o.owner_token_hash = x.owner_token_hash)))";
+
 /// Marks the lane and class of claimed match `$1` as served last.
 const MARK_SERVED: &str = "
     insert into queue_lane (lane, served)
     select x.lane, (select coalesce(max(served), 0) + 1 from queue_lane)
     from (
-        select case when m.tournament_id is null then 'o:' || b.owner_token_hash
+        select case when m.tournament_id is null
+                then coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash)
                 else 't:' || cast(m.tournament_id as text) end as lane
         from match m join bot b on b.bot_id = m.bot_id where m.match_id = $1
         union all
@@ -360,12 +370,12 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn stored_bytes_of_owner_of(&self, bot_id: i64) -> Result<i64> {
-        let bytes: Option<i64> = sqlx::query_scalar(
+        let bytes: Option<i64> = sqlx::query_scalar(&format!(
             "select cast(sum(length(r.data)) as bigint) from match_record r
              join match m on m.match_id = r.match_id
              join bot b on b.bot_id = m.bot_id
-             where b.owner_token_hash = (select owner_token_hash from bot where bot_id = $1)",
-        )
+             where {SAME_OWNER}"
+        ))
         .bind(bot_id)
         .fetch_one(self.pool())
         .await?;
@@ -378,11 +388,10 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn queued_for_owner_of(&self, bot_id: i64) -> Result<i64> {
-        Ok(sqlx::query_scalar(
+        Ok(sqlx::query_scalar(&format!(
             "select count(*) from match m join bot b on b.bot_id = m.bot_id
-             where m.status = 'queued' and b.owner_token_hash =
-                 (select owner_token_hash from bot where bot_id = $1)",
-        )
+             where m.status = 'queued' and {SAME_OWNER}"
+        ))
         .bind(bot_id)
         .fetch_one(self.pool())
         .await?)

@@ -840,6 +840,10 @@ async fn the_openapi_document_lists_every_route() {
         ("/api/tournaments", vec!["get", "post"]),
         ("/api/tournaments/{id}", vec!["get"]),
         ("/api/leaderboard", vec!["get"]),
+        ("/api/entrants", vec!["post"]),
+        ("/api/entrants/{id}", vec!["get"]),
+        ("/api/entrants/{id}/key", vec!["post"]),
+        ("/api/registration", vec!["get", "put"]),
         ("/healthz", vec!["get"]),
         ("/metrics", vec!["get"]),
         ("/api/openapi.json", vec!["get"]),
@@ -1518,4 +1522,107 @@ async fn a_bot_encoding_a_hidden_maze_in_its_step_count_leaks_nothing_per_match(
             }
         }
     }
+}
+
+#[tokio::test]
+async fn entrants_register_by_invite_and_their_key_acts_for_their_bots_until_rotated() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "0"]);
+    let put = |body: Value| {
+        let server = &server;
+        async move {
+            server
+                .call(Method::PUT, "/api/registration", Some(body), Some(ADMIN))
+                .await
+        }
+    };
+    let (s, v, _) = put(json!({"mode": "invite", "invite_code": "short"})).await;
+    assert_error(s, &v, 422);
+    let (s, v, _) = put(json!({"mode": "invite", "invite_code": "class-of-2026"})).await;
+    assert_eq!((s, v["mode"].as_str()), (200, Some("invite")), "{v}");
+    let (_, v) = server.get("/api/registration", None).await;
+    assert_eq!(v, json!({"mode": "invite"}), "the code is never shown");
+    // Without the code: refused; with it: an entrant and its key.
+    let team = json!({"name": "team-a", "members": ["Ada", "Alan"]});
+    let (s, v) = server.post("/api/entrants", team.clone(), None).await;
+    assert_error(s, &v, 403);
+    let mut with_code = team.clone();
+    with_code["invite_code"] = json!("class-of-2026");
+    let (s, e) = server.post("/api/entrants", with_code.clone(), None).await;
+    assert_eq!(s, 201, "{e}");
+    let (s, v) = server.post("/api/entrants", with_code, None).await;
+    assert_error(s, &v, 409);
+    let (entrant, key) = (
+        e["entrant_id"].as_i64().unwrap(),
+        e["key"].as_str().unwrap().to_string(),
+    );
+    // Bots: not anonymously on a server that is not open; with the key, the entrant's.
+    let bot_body =
+        json!({"name": "a-bot", "command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (s, v, _) = server
+        .call(Method::POST, "/api/bots", Some(bot_body.clone()), None)
+        .await;
+    assert_error(s, &v, 403);
+    let (s, b, _) = server
+        .call(Method::POST, "/api/bots", Some(bot_body), Some(&key))
+        .await;
+    assert_eq!(s, 201, "{b}");
+    let bot = b["bot_id"].as_i64().unwrap();
+    let (_, view) = server.get(&format!("/api/entrants/{entrant}"), None).await;
+    assert_eq!(view["members"], json!(["Ada", "Alan"]));
+    assert_eq!(view["bots"][0]["bot_id"], bot, "{view}");
+    assert!(!view.to_string().contains(&key));
+    // The key acts for the bot (as does the bot's own token).
+    let queue_with = |token: String| {
+        let server = &server;
+        async move {
+            server
+                .call(
+                    Method::POST,
+                    "/api/matches",
+                    Some(json!({"bot_id": bot, "maze_id": 1})),
+                    Some(&token),
+                )
+                .await
+        }
+    };
+    assert_eq!(queue_with(key.clone()).await.0, 202);
+    assert_eq!(
+        queue_with(b["owner_token"].as_str().unwrap().to_string())
+            .await
+            .0,
+        202
+    );
+    // Rotated: the old key stops at once, the new one works; nobody else may rotate it.
+    let (s, v, _) = server
+        .call(
+            Method::POST,
+            &format!("/api/entrants/{entrant}/key"),
+            None,
+            None,
+        )
+        .await;
+    assert_error(s, &v, 401);
+    let (s, fresh, _) = server
+        .call(
+            Method::POST,
+            &format!("/api/entrants/{entrant}/key"),
+            None,
+            Some(&key),
+        )
+        .await;
+    assert_eq!(s, 200, "{fresh}");
+    let fresh = fresh["key"].as_str().unwrap().to_string();
+    assert_eq!(queue_with(key).await.0, 403);
+    assert_eq!(queue_with(fresh).await.0, 202);
+    // Closed: nobody registers but through the admin.
+    put(json!({"mode": "closed"})).await;
+    let (s, v) = server
+        .post("/api/entrants", json!({"name": "team-b"}), None)
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v) = server
+        .post("/api/entrants", json!({"name": "team-b"}), Some(ADMIN))
+        .await;
+    assert_eq!(s, 201, "{v}");
 }

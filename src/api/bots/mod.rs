@@ -183,32 +183,6 @@ pub struct BotDetail {
     pub versions: Vec<VersionView>,
 }
 
-/// Refuses an anonymous registration past the limit of its client address (429 with
-/// Retry-After): a registration is free, and each gives a new owner token.
-fn check_registration_rate(state: &AppState, caller: &Caller, request: &Request) -> ApiResult<()> {
-    let (Some(limiter), false) = (&state.settings.registrations, caller.is_admin()) else {
-        return Ok(());
-    };
-    let Some(axum::extract::ConnectInfo(addr)) = request
-        .extensions()
-        .get::<axum::extract::ConnectInfo<std::net::SocketAddr>>()
-    else {
-        return Ok(());
-    };
-    limiter.check_key(&addr.ip()).map_err(|not_until| {
-        use governor::clock::Clock;
-        let wait = not_until.wait_time_from(governor::clock::DefaultClock::default().now());
-        ApiError::TooManyRequests {
-            message: format!(
-                "{} has registered as many bots as it may this hour; try again in {} s",
-                addr.ip(),
-                wait.as_secs() + 1
-            ),
-            retry_after_secs: wait.as_secs() + 1,
-        }
-    })
-}
-
 /// Register a bot with its files; answers its id and owner token (anonymous
 /// registrations are limited per client address: 429 with Retry-After).
 #[utoipa::path(post, path = "/api/bots", tag = "bots",
@@ -220,6 +194,7 @@ fn check_registration_rate(state: &AppState, caller: &Caller, request: &Request)
         (status = 201, body = BotCreated),
         (status = 400, body = ErrorBody), (status = 409, body = ErrorBody),
         (status = 413, body = ErrorBody), (status = 422, body = ErrorBody),
+        (status = 403, body = ErrorBody, description = "registration is not open and no entrant's key was given"),
         (status = 429, body = ErrorBody, description = "too many registrations from this address; see Retry-After"),
     ))]
 async fn create_bot(
@@ -227,12 +202,38 @@ async fn create_bot(
     caller: Caller,
     request: Request,
 ) -> ApiResult<(StatusCode, axum::Json<BotCreated>)> {
-    check_registration_rate(&state, &caller, &request)?;
+    let client = request
+        .extensions()
+        .get::<axum::extract::ConnectInfo<std::net::SocketAddr>>()
+        .map(|c| c.0);
+    super::check_registration_rate(&state, &caller, client)?;
+    // With an entrant's key the bot is the entrant's; without one, only an open server
+    // takes it.
+    let entrant = match &caller {
+        Caller::Token(hash) => state.storage.entrant_by_key(hash).await?,
+        _ => None,
+    };
+    if entrant.is_none() && !caller.is_admin() {
+        let registration = state.storage.registration().await?;
+        if registration != crate::storage::entrants::Registration::Open {
+            return Err(ApiError::Forbidden(
+                "registration is not open: register bots with an entrant's key \
+                 (POST /api/entrants, then Authorization: Bearer KEY)"
+                    .into(),
+            ));
+        }
+    }
     let (name, submission) = read_upload(&state, request).await?.submission()?;
     let name = name.ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
     let registered =
         registry::bots::register(&state.storage, &name, submission, &state.settings.scratch())
             .await?;
+    if let Some(e) = &entrant {
+        state
+            .storage
+            .set_bot_entrant(registered.version.bot_id, e.entrant_id)
+            .await?;
+    }
     state.wake.notify_waiters();
     let row = registered.version;
     let token = registered.owner_token;

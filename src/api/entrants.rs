@@ -1,0 +1,288 @@
+//! Entrants: a person or a team with an API key (shown once, stored hashed, rotatable)
+//! that acts for every bot registered with it; and the server's registration mode
+//! (open, closed, or by invite code), set by the admin.
+
+use axum::extract::State;
+use axum::http::StatusCode;
+use serde::{Deserialize, Serialize};
+use utoipa::ToSchema;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
+
+use super::AppState;
+use super::auth::{Caller, hash_token, new_token};
+use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
+use crate::storage::entrants::Registration;
+
+/// The most members an entrant lists, and the longest member name.
+const MAX_MEMBERS: usize = 20;
+const MAX_MEMBER_CHARS: usize = 100;
+
+pub(super) fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(create_entrant))
+        .routes(routes!(get_entrant))
+        .routes(routes!(rotate_key))
+        .routes(routes!(get_registration, set_registration))
+}
+
+/// A new entrant.
+#[derive(Debug, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EntrantRequest {
+    /// Unique name: 1 to 64 letters, digits, `-`, `_`, `.`.
+    pub name: String,
+    /// The members' names (at most 20).
+    #[serde(default)]
+    pub members: Vec<String>,
+    /// The invite code, when registration is by invite.
+    pub invite_code: Option<String>,
+}
+
+/// A registered entrant and its key (shown once).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct EntrantCreated {
+    /// Id.
+    pub entrant_id: i64,
+    /// Name.
+    pub name: String,
+    /// The entrant's key: acts for every bot registered with it (`Authorization: Bearer
+    /// KEY`). Shown once; keep it.
+    pub key: String,
+}
+
+/// An entrant as anyone sees it.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct EntrantView {
+    /// Id.
+    pub entrant_id: i64,
+    /// Name.
+    pub name: String,
+    /// The members' names.
+    pub members: Vec<String>,
+    /// When it registered (unix ms).
+    pub created_at: i64,
+    /// Its bots: id and name.
+    pub bots: Vec<EntrantBot>,
+}
+
+/// A bot of an entrant.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct EntrantBot {
+    /// Id.
+    pub bot_id: i64,
+    /// Name.
+    pub name: String,
+}
+
+/// A replaced key.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct NewKey {
+    /// The new key (the old one no longer works). Shown once.
+    pub key: String,
+}
+
+/// The registration mode.
+#[derive(Debug, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RegistrationMode {
+    /// `open` (anyone registers), `closed` (only the admin registers entrants; bots only
+    /// with an entrant's key), or `invite` (an entrant gives the invite code).
+    pub mode: String,
+    /// With `invite`, when set by the admin: the code (kept only as its hash).
+    #[serde(default, skip_serializing)]
+    pub invite_code: Option<String>,
+}
+
+fn registration_name(r: &Registration) -> &'static str {
+    match r {
+        Registration::Open => "open",
+        Registration::Closed => "closed",
+        Registration::Invite(_) => "invite",
+    }
+}
+
+/// Register an entrant: answers its id and key (shown once). Open registration: anyone;
+/// by invite: with the code; closed: the admin only.
+#[utoipa::path(post, path = "/api/entrants", tag = "entrants",
+    request_body = EntrantRequest,
+    responses(
+        (status = 201, body = EntrantCreated),
+        (status = 400, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 409, body = ErrorBody), (status = 422, body = ErrorBody),
+        (status = 429, body = ErrorBody, description = "too many registrations from this address; see Retry-After"),
+    ))]
+async fn create_entrant(
+    State(state): State<AppState>,
+    caller: Caller,
+    client: Option<axum::Extension<axum::extract::ConnectInfo<std::net::SocketAddr>>>,
+    AppJson(body): AppJson<EntrantRequest>,
+) -> ApiResult<(StatusCode, axum::Json<EntrantCreated>)> {
+    super::check_registration_rate(&state, &caller, client.map(|c| c.0.0))?;
+    crate::registry::bots::check_name(&body.name)
+        .map_err(|e| ApiError::Unprocessable(e.to_string().replace("bot name", "entrant name")))?;
+    if body.members.len() > MAX_MEMBERS
+        || body
+            .members
+            .iter()
+            .any(|m| m.trim().is_empty() || m.chars().count() > MAX_MEMBER_CHARS)
+    {
+        return Err(ApiError::Unprocessable(format!(
+            "members: at most {MAX_MEMBERS} names of 1 to {MAX_MEMBER_CHARS} characters"
+        )));
+    }
+    if !caller.is_admin() {
+        match state.storage.registration().await? {
+            Registration::Open => {}
+            Registration::Closed => {
+                return Err(ApiError::Forbidden(
+                    "registration is closed: the admin registers entrants".into(),
+                ));
+            }
+            Registration::Invite(hash) => {
+                if body.invite_code.as_deref().map(hash_token) != Some(hash) {
+                    return Err(ApiError::Forbidden(
+                        "registration is by invite: give the invite code (`invite_code`)".into(),
+                    ));
+                }
+            }
+        }
+    }
+    let key = new_token()?;
+    let members = serde_json::to_string(&body.members)
+        .map_err(|e| ApiError::Internal(format!("members: {e}")))?;
+    let row = state
+        .storage
+        .create_entrant(&body.name, &members, &hash_token(&key))
+        .await?;
+    Ok((
+        StatusCode::CREATED,
+        axum::Json(EntrantCreated {
+            entrant_id: row.entrant_id,
+            name: row.name,
+            key,
+        }),
+    ))
+}
+
+/// An entrant: name, members and bots.
+#[utoipa::path(get, path = "/api/entrants/{id}", tag = "entrants",
+    params(("id" = i64, Path, description = "entrant id")),
+    responses((status = 200, body = EntrantView), (status = 404, body = ErrorBody)))]
+async fn get_entrant(
+    State(state): State<AppState>,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<axum::Json<EntrantView>> {
+    let row = state
+        .storage
+        .get_entrant(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no entrant {id}")))?;
+    let bots = state
+        .storage
+        .bots_of_entrant(id)
+        .await?
+        .into_iter()
+        .map(|(bot_id, name)| EntrantBot { bot_id, name })
+        .collect();
+    Ok(axum::Json(EntrantView {
+        entrant_id: row.entrant_id,
+        name: row.name,
+        members: serde_json::from_str(&row.members).unwrap_or_default(),
+        created_at: row.created_at,
+        bots,
+    }))
+}
+
+/// Replace an entrant's key (its current key or the admin token): the old key stops
+/// working at once.
+#[utoipa::path(post, path = "/api/entrants/{id}/key", tag = "entrants",
+    params(("id" = i64, Path, description = "entrant id")),
+    security(("bearer" = [])),
+    responses(
+        (status = 200, body = NewKey),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody),
+    ))]
+async fn rotate_key(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<axum::Json<NewKey>> {
+    if state.storage.get_entrant(id).await?.is_none() {
+        return Err(ApiError::NotFound(format!("no entrant {id}")));
+    }
+    let allowed = match &caller {
+        Caller::Admin => true,
+        Caller::Anonymous => false,
+        Caller::Token(hash) => state
+            .storage
+            .entrant_by_key(hash)
+            .await?
+            .is_some_and(|e| e.entrant_id == id),
+    };
+    if !allowed {
+        return Err(match caller {
+            Caller::Anonymous => ApiError::Unauthorized(format!(
+                "this needs entrant {id}'s key or the admin token (Authorization: Bearer KEY)"
+            )),
+            _ => ApiError::Forbidden(format!("this is not entrant {id}'s key")),
+        });
+    }
+    let key = new_token()?;
+    state
+        .storage
+        .rotate_entrant_key(id, &hash_token(&key))
+        .await?;
+    Ok(axum::Json(NewKey { key }))
+}
+
+/// The registration mode: `open`, `closed` or `invite`.
+#[utoipa::path(get, path = "/api/registration", tag = "entrants",
+    responses((status = 200, body = RegistrationMode)))]
+async fn get_registration(
+    State(state): State<AppState>,
+) -> ApiResult<axum::Json<RegistrationMode>> {
+    let r = state.storage.registration().await?;
+    Ok(axum::Json(RegistrationMode {
+        mode: registration_name(&r).into(),
+        invite_code: None,
+    }))
+}
+
+/// Set the registration mode (admin token): `open`, `closed`, or `invite` with an
+/// `invite_code` of at least 8 characters.
+#[utoipa::path(put, path = "/api/registration", tag = "entrants",
+    request_body = RegistrationMode,
+    security(("bearer" = [])),
+    responses(
+        (status = 200, body = RegistrationMode),
+        (status = 400, body = ErrorBody), (status = 401, body = ErrorBody),
+        (status = 403, body = ErrorBody), (status = 422, body = ErrorBody),
+    ))]
+async fn set_registration(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppJson(body): AppJson<RegistrationMode>,
+) -> ApiResult<axum::Json<RegistrationMode>> {
+    caller.require_admin()?;
+    let r = match (body.mode.as_str(), body.invite_code.as_deref()) {
+        ("open", None) => Registration::Open,
+        ("closed", None) => Registration::Closed,
+        ("invite", Some(code)) if code.chars().count() >= 8 => {
+            Registration::Invite(hash_token(code))
+        }
+        _ => {
+            return Err(ApiError::Unprocessable(
+                "mode: `open` or `closed` (no invite_code), or `invite` with an invite_code of \
+                 at least 8 characters"
+                    .into(),
+            ));
+        }
+    };
+    state.storage.set_registration(&r).await?;
+    Ok(axum::Json(RegistrationMode {
+        mode: registration_name(&r).into(),
+        invite_code: None,
+    }))
+}
