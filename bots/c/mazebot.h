@@ -123,7 +123,7 @@ static inline mb_answer mb_reset(void)
 /* The server keeps at most this many bytes of one step's debug JSON, and of a
  * whole match's. mb_run sends nothing beyond them (one line on stderr says so). */
 #define MB_DEBUG_MAX (16 * 1024)
-#define MB_DEBUG_MATCH_MAX (512 * 1024)
+#define MB_DEBUG_MATCH_MAX (64 * 1024)
 
 /* Wall sides, the same numbers as mazemap.h's MM_UP .. MM_LEFT. */
 enum { MB_SIDE_UP, MB_SIDE_RIGHT, MB_SIDE_DOWN, MB_SIDE_LEFT };

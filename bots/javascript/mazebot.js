@@ -69,7 +69,7 @@
  *   path([[x, y], ...])      a planned path
  * (0, 0) is the bottom-left cell, x to the right, y up. Strings always go out as
  * valid JSON; NaN and infinities become null. A debug object over 16 KiB of JSON is
- * not sent (a warning goes to stderr), nor is any once the match has sent 512 KiB:
+ * not sent (a warning goes to stderr), nor is any once the match has sent 64 KiB:
  * the server would drop them anyway.
  *
  * Printing is safe: once run() is called, console.log/info/debug and
@@ -102,7 +102,7 @@ function integer(v, name) {
 
 /** The server keeps at most this many bytes of debug JSON per step, and per match. */
 const MAX_DEBUG_STEP_BYTES = 16 * 1024;
-const MAX_DEBUG_MATCH_BYTES = 512 * 1024;
+const MAX_DEBUG_MATCH_BYTES = 64 * 1024;
 
 /** Wall sides, in the order of the direction numbers 0..3 (UP, RIGHT, DOWN, LEFT). */
 const SIDES = ['up', 'right', 'down', 'left'];
@@ -211,7 +211,7 @@ function reset(debug) {
   return answer;
 }
 
-/** Leaves out debug objects the server would drop (over 16 KiB, or past 512 KiB). */
+/** Leaves out debug objects the server would drop (over 16 KiB, or past 64 KiB). */
 function debugBudget() {
   let used = 0;
   const warned = new Set();

@@ -78,7 +78,7 @@ what a bot believes, step by step, as a layer over the maze. Build it with
 (0, 0) is the bottom-left cell, x to the right, y up. Strings are sent as
 valid JSON whatever they hold; NaN and infinities become ``null``. A debug
 object over 16 KiB of JSON is not sent (a warning goes to stderr), nor is any
-once the match has sent 512 KiB: the server would drop them anyway.
+once the match has sent 64 KiB: the server would drop them anyway.
 
 Printing is safe: while ``run`` is active, ``print`` (and anything else that
 writes to stdout, even a child process) goes to stderr, which the server keeps
@@ -105,7 +105,7 @@ RESET = "reset"
 
 #: The server keeps at most this many bytes of debug JSON per step, and per match.
 MAX_DEBUG_STEP_BYTES = 16 * 1024
-MAX_DEBUG_MATCH_BYTES = 512 * 1024
+MAX_DEBUG_MATCH_BYTES = 64 * 1024
 
 #: Wall sides, in the order of the direction numbers 0..3 (UP, RIGHT, DOWN, LEFT).
 SIDES = ("up", "right", "down", "left")
@@ -253,7 +253,7 @@ def encode_answer(answer):
 
 
 class _DebugBudget:
-    """Leaves out debug objects the server would drop (over 16 KiB, or past 512 KiB)."""
+    """Leaves out debug objects the server would drop (over 16 KiB, or past 64 KiB)."""
 
     def __init__(self):
         self.used = 0

@@ -58,6 +58,7 @@ class SimpleBot:
         self.entered_goal = False  # a step's movement has ended in the goal room (run 0)
         self.dist = None  # the last flood fill (run 0), for the debug drawing
         self.walls_sent = -1  # how many walls the last debug drawing listed
+        self.grid_sent = False  # whether the drawing holds the distances of run 0
 
     def _home(self):
         self.x, self.y, self.heading = 0, 0, UP
@@ -161,6 +162,7 @@ class SimpleBot:
         self._sense(sensors)
         if run == 0 and self.entered_goal:
             # clear the run-0 drawing: run 1 follows the known map only
+            self.grid_sent = False
             return mazebot.reset(debug=self._debug("goal room entered: reset").grid([]).path([]))
         move = self._plan_move() if run == 1 else None
         if move is None:
@@ -178,11 +180,16 @@ class SimpleBot:
         walls = [(x, y, d) for x in range(self.n) for y in range(self.n) for d in (UP, RIGHT)
                  if self.edges[x][y][d] is WALL
                  and self._inside(x + DELTA[d][0], y + DELTA[d][1])]
-        if len(walls) != self.walls_sent:  # fields are sticky: send the walls when they change
+        changed = len(walls) != self.walls_sent
+        if changed:  # fields are sticky: send the walls when they change
             self.walls_sent = len(walls)
             debug.walls(walls)
         if dist is not None:
-            debug.grid([[dist.get((x, y)) for y in range(self.n)] for x in range(self.n)])
+            # the distances follow the known walls: sent again only when they change, so a
+            # match's drawing stays well inside the server's 64 KiB
+            if changed or not self.grid_sent:
+                self.grid_sent = True
+                debug.grid([[dist.get((x, y)) for y in range(self.n)] for x in range(self.n)])
             # the way down the distances from the robot's cell to the goal room
             path, (x, y) = [], (self.x, self.y)
             while (x, y) in dist:

@@ -24,7 +24,7 @@ use std::io::{BufRead, Write};
 /// The server keeps at most this many bytes of one step's debug JSON.
 pub const MAX_DEBUG_STEP_BYTES: usize = 16 * 1024;
 /// The server keeps at most this many bytes of debug JSON per match.
-pub const MAX_DEBUG_MATCH_BYTES: usize = 512 * 1024;
+pub const MAX_DEBUG_MATCH_BYTES: usize = 64 * 1024;
 
 /// Wall sides, in the order of the direction numbers 0..3 (`map::UP`, `RIGHT`, `DOWN`,
 /// `LEFT`).
