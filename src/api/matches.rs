@@ -351,23 +351,21 @@ async fn get_match_replay(
             _ => ApiError::Forbidden(msg),
         });
     }
-    let played_steps = row.total_steps.is_some_and(|n| n > 0);
-    let record = match state.storage.get_record(id).await? {
-        Some(r) if !r.trace.is_empty() || (row.total_steps.is_some() && !played_steps) => r,
-        // Played, but its trace is gone: pruned.
-        _ if played_steps => {
-            return Err(ApiError::Conflict(format!(
-                "the trace of match {id} was removed to save space (an old practice match); \
-                 GET /api/matches/{id} still has its result"
-            )));
-        }
-        _ => {
-            return Err(ApiError::Conflict(format!(
+    let record = state.storage.get_record(id).await?;
+    if row.trace_removed(record.as_ref()) {
+        return Err(ApiError::Conflict(format!(
+            "the trace of match {id} was removed to save space (an old practice match); \
+             GET /api/matches/{id} still has its result"
+        )));
+    }
+    let record = record
+        .filter(|r| !r.trace.is_empty() || row.total_steps.is_some())
+        .ok_or_else(|| {
+            ApiError::Conflict(format!(
                 "match {id} has not been played yet ({})",
                 row.status
-            )));
-        }
-    };
+            ))
+        })?;
     // The bot's stderr is its owner's: left out for everyone else, public maze or not.
     let stderr_shown = caller.owns(&state, row.bot_id).await?;
     let record = if stderr_shown {

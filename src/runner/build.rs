@@ -102,11 +102,6 @@ impl BuildArea {
         &self.work
     }
 
-    /// The bound, in bytes.
-    pub fn limit(&self) -> u64 {
-        self.limit
-    }
-
     /// Whether the build has filled its area (a mounted area: less than 64 KiB free;
     /// a watched one: more than its bound in blocks on the disk).
     fn filled(&self) -> bool {

@@ -31,6 +31,9 @@ pub enum Registration {
     Invite(String),
 }
 
+/// The columns of an [`EntrantRow`].
+const COLUMNS: &str = "entrant_id, name, members, created_at, key_rotated_at";
+
 impl Storage {
     /// Registers an entrant whose key has SHA-256 `key_hash`.
     ///
@@ -43,10 +46,10 @@ impl Storage {
         key_hash: &str,
     ) -> Result<EntrantRow> {
         let _turn = self.write_turn().await;
-        sqlx::query_as(
+        sqlx::query_as(&format!(
             "insert into entrant (name, members, key_hash, created_at) values ($1, $2, $3, $4)
-             returning entrant_id, name, members, created_at, key_rotated_at",
-        )
+             returning {COLUMNS}"
+        ))
         .bind(name)
         .bind(members_json)
         .bind(key_hash)
@@ -67,10 +70,9 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn get_entrant(&self, entrant_id: i64) -> Result<Option<EntrantRow>> {
-        Ok(sqlx::query_as(
-            "select entrant_id, name, members, created_at, key_rotated_at from entrant
-             where entrant_id = $1",
-        )
+        Ok(sqlx::query_as(&format!(
+            "select {COLUMNS} from entrant where entrant_id = $1"
+        ))
         .bind(entrant_id)
         .fetch_optional(self.pool())
         .await?)
@@ -81,10 +83,9 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn entrant_by_key(&self, key_hash: &str) -> Result<Option<EntrantRow>> {
-        Ok(sqlx::query_as(
-            "select entrant_id, name, members, created_at, key_rotated_at from entrant
-             where key_hash = $1",
-        )
+        Ok(sqlx::query_as(&format!(
+            "select {COLUMNS} from entrant where key_hash = $1"
+        ))
         .bind(key_hash)
         .fetch_optional(self.pool())
         .await?)

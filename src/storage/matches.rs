@@ -100,6 +100,12 @@ impl MatchRow {
         self
     }
 
+    /// Whether the match was played but its stored trace is gone (`record`, as
+    /// [`Storage::get_record`] gave it): an old practice match, pruned.
+    pub fn trace_removed(&self, record: Option<&MatchRecord>) -> bool {
+        self.total_steps.is_some_and(|n| n > 0) && record.is_none_or(|r| r.trace.is_empty())
+    }
+
     /// The row's summary of the record (empty while the match is not played; a summary
     /// that cannot be read counts as empty).
     pub fn summary(&self) -> MatchSummary {

@@ -209,9 +209,7 @@ async fn match_page(
     };
     // Pages never use a token: the bot's stderr (its owner's) is left out, and the
     // page's owner form fetches it from the API with the pasted token.
-    let pruned = !hidden
-        && row.total_steps.is_some_and(|n| n > 0)
-        && stored.as_ref().is_none_or(|r| r.trace.is_empty());
+    let pruned = !hidden && row.trace_removed(stored.as_ref());
     if let Some(mut r) = stored
         .filter(|_| row.total_steps.is_some() && !pruned)
         .map(MatchRecord::without_stderr)
