@@ -1,5 +1,5 @@
 //! The server's connections: accepted with a cap on how many are open in all and from
-//! one client address, served by hyper with a deadline for each request's head (which
+//! one client address, served by hyper (HTTP/1) with a deadline for each request's head (which
 //! also closes a kept-alive connection left idle that long), and finished gracefully on
 //! shutdown. A client over a cap is closed at once, without a byte read; the body of a
 //! request and its handling are bounded by the request timeout of [`super::app`].
@@ -135,7 +135,10 @@ pub async fn serve(
     let total = Arc::new(Semaphore::new(limits.max_connections));
     let per_address = Arc::new(PerAddress::default());
     let graceful = hyper_util::server::graceful::GracefulShutdown::new();
-    let mut builder = auto::Builder::new(TokioExecutor::new());
+    // HTTP/1 only: hyper's head timeout is HTTP/1's, and an HTTP/2 connection (h2c,
+    // prior knowledge) could otherwise idle past it for good. (No upgrades are served:
+    // `http1_only` holds only without them.)
+    let mut builder = auto::Builder::new(TokioExecutor::new()).http1_only();
     builder
         .http1()
         .timer(TokioTimer::new())
@@ -178,7 +181,7 @@ pub async fn serve(
             },
         ));
         let connection = builder
-            .serve_connection_with_upgrades(TokioIo::new(stream), service)
+            .serve_connection(TokioIo::new(stream), service)
             .into_owned();
         let connection = graceful.watch(connection);
         tokio::spawn(async move {

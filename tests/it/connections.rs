@@ -30,17 +30,24 @@ fn closed_within(stream: &mut TcpStream, wait: Duration) -> bool {
             let deadline = Instant::now() + wait;
             while Instant::now() < deadline {
                 match stream.read(&mut buf) {
-                    Ok(0) | Err(_) => return true,
+                    Ok(0) => return true,
                     Ok(_) => {}
+                    Err(e) if is_timeout(&e) => {}
+                    Err(_) => return true,
                 }
             }
             false
         }
-        Err(e) => !matches!(
-            e.kind(),
-            std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-        ),
+        Err(e) => !is_timeout(&e),
     }
+}
+
+/// Whether a read failed only because nothing came within its timeout.
+fn is_timeout(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+    )
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -101,6 +108,37 @@ async fn a_thousand_idle_connections_neither_stop_healthz_nor_the_workers_and_ar
     .await
     .unwrap();
     assert_eq!(still_open, 0, "idle connections the server kept");
+    let (status, _) = server.get("/healthz", None).await;
+    assert_eq!(status, 200);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_http2_client_cannot_hold_a_connection_past_the_head_timeout() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "0", "--head-timeout-secs", "2"]);
+    let addr: SocketAddr = server.base.trim_start_matches("http://").parse().unwrap();
+    // The HTTP/2 preface and an empty SETTINGS frame (h2c, prior knowledge), then nothing.
+    let mut stream = TcpStream::connect(addr).unwrap();
+    stream
+        .write_all(b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n\0\0\0\x04\0\0\0\0\0")
+        .unwrap();
+    let closed = tokio::task::spawn_blocking(move || {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            if closed_within(&mut stream, Duration::from_millis(200)) {
+                return true;
+            }
+            if Instant::now() > deadline {
+                return false;
+            }
+        }
+    })
+    .await
+    .unwrap();
+    assert!(
+        closed,
+        "an HTTP/2 connection stayed open past the head timeout"
+    );
     let (status, _) = server.get("/healthz", None).await;
     assert_eq!(status, 200);
 }
