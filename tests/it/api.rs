@@ -1626,3 +1626,67 @@ async fn entrants_register_by_invite_and_their_key_acts_for_their_bots_until_rot
         .await;
     assert_eq!(s, 201, "{v}");
 }
+
+#[tokio::test]
+async fn an_entrants_key_acts_for_no_other_entrant_and_sets_nothing_of_the_server() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "0"]);
+    let mut keys = Vec::new();
+    for name in ["team-a", "team-b"] {
+        let (s, e) = server
+            .post("/api/entrants", json!({"name": name}), None)
+            .await;
+        assert_eq!(s, 201, "{e}");
+        keys.push((
+            e["entrant_id"].as_i64().unwrap(),
+            e["key"].as_str().unwrap().to_string(),
+        ));
+    }
+    let (b_id, b_key) = keys[1].clone();
+    let a_key = keys[0].1.clone();
+    let body =
+        json!({"name": "b-bot", "command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (s, bot, _) = server
+        .call(Method::POST, "/api/bots", Some(body), Some(&b_key))
+        .await;
+    assert_eq!(s, 201, "{bot}");
+    let bot = bot["bot_id"].as_i64().unwrap();
+    // A's key: not B's bot, not B's key, not the registration mode.
+    let (s, v, _) = server
+        .call(
+            Method::POST,
+            "/api/matches",
+            Some(json!({"bot_id": bot, "maze_id": 1})),
+            Some(&a_key),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v, _) = server
+        .call(
+            Method::POST,
+            &format!("/api/entrants/{b_id}/key"),
+            None,
+            Some(&a_key),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v, _) = server
+        .call(
+            Method::PUT,
+            "/api/registration",
+            Some(json!({"mode": "open"})),
+            Some(&a_key),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    // B's key still works: nothing A did changed it.
+    let (s, _, _) = server
+        .call(
+            Method::POST,
+            "/api/matches",
+            Some(json!({"bot_id": bot, "maze_id": 1})),
+            Some(&b_key),
+        )
+        .await;
+    assert_eq!(s, 202);
+}
