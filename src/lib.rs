@@ -23,6 +23,7 @@ pub mod api;
 pub mod botfiles;
 pub mod builder;
 pub mod cli;
+pub mod competition;
 pub mod engine;
 pub mod manifest;
 pub mod metrics;

@@ -422,6 +422,12 @@ impl Worker {
             .map_or_else(|| PathBuf::from(&job.dir), |f| f.dir.clone());
         let mut bot = BotSpec::new(job.command.clone(), dir);
         bot.env = crate::storage::bots::env_pairs(&job.env);
+        // A competition's matches play under its own limits.
+        let job_limits = job
+            .limits
+            .as_deref()
+            .and_then(|l| serde_json::from_str::<crate::competition::Limits>(l).ok())
+            .map_or(self.config.limits, |l| l.apply(self.config.limits));
         let started = Instant::now();
         let lease_ms = self.config.lease.as_millis() as i64;
         let mut renew = tokio::time::interval(self.config.lease / 3);
@@ -430,7 +436,7 @@ impl Worker {
             &bot,
             &maze,
             job.seed as u64,
-            self.config.limits,
+            job_limits,
             &self.config.sandbox,
             |_| {},
         );

@@ -16,6 +16,8 @@ pub enum Caller {
     Anonymous,
     /// The admin token.
     Admin,
+    /// An organiser's key, by its hash: manages competitions and sees what they seal.
+    Organiser(String),
     /// Some other token (maybe a bot's owner token), by its hash.
     Token(String),
 }
@@ -44,6 +46,8 @@ impl FromRequestParts<AppState> for Caller {
         let hash = hash_token(token);
         if hash == state.settings.admin_token_hash {
             Ok(Caller::Admin)
+        } else if state.storage.is_organiser(&hash).await? {
+            Ok(Caller::Organiser(hash))
         } else {
             Ok(Caller::Token(hash))
         }
@@ -56,6 +60,30 @@ impl Caller {
         matches!(self, Caller::Admin)
     }
 
+    /// Whether this is the admin or an organiser: may manage competitions and see what
+    /// they seal (the private sets before the close, the final run before the results).
+    pub fn can_organise(&self) -> bool {
+        matches!(self, Caller::Admin | Caller::Organiser(_))
+    }
+
+    /// Refuses anyone but the admin and the organisers: 401 without a token, 403 with
+    /// another one.
+    ///
+    /// # Errors
+    /// As said.
+    pub fn require_organiser(&self) -> Result<(), ApiError> {
+        match self {
+            Caller::Admin | Caller::Organiser(_) => Ok(()),
+            Caller::Anonymous => Err(ApiError::Unauthorized(
+                "this needs an organiser's key or the admin token (Authorization: Bearer TOKEN)"
+                    .into(),
+            )),
+            Caller::Token(_) => Err(ApiError::Forbidden(
+                "this needs an organiser's key or the admin token".into(),
+            )),
+        }
+    }
+
     /// Refuses anyone but the admin: 401 without a token, 403 with another one.
     ///
     /// # Errors
@@ -66,7 +94,9 @@ impl Caller {
             Caller::Anonymous => Err(ApiError::Unauthorized(
                 "this needs the admin token (Authorization: Bearer TOKEN)".into(),
             )),
-            Caller::Token(_) => Err(ApiError::Forbidden("this needs the admin token".into())),
+            Caller::Token(_) | Caller::Organiser(_) => {
+                Err(ApiError::Forbidden("this needs the admin token".into()))
+            }
         }
     }
 
@@ -77,7 +107,7 @@ impl Caller {
     pub async fn owns(&self, state: &AppState, bot_id: i64) -> Result<bool, ApiError> {
         Ok(match self {
             Caller::Admin => true,
-            Caller::Anonymous => false,
+            Caller::Anonymous | Caller::Organiser(_) => false,
             Caller::Token(hash) => state.storage.is_bot_owner(bot_id, hash).await?,
         })
     }

@@ -214,7 +214,7 @@ async fn rotate_key(
     }
     let allowed = match &caller {
         Caller::Admin => true,
-        Caller::Anonymous => false,
+        Caller::Anonymous | Caller::Organiser(_) => false,
         Caller::Token(hash) => state
             .storage
             .entrant_by_key(hash)

@@ -40,7 +40,12 @@ async fn get_leaderboard(
 ) -> ApiResult<axum::Json<Vec<Standing>>> {
     let scope = match (q.tournament, q.scope.as_deref()) {
         (Some(id), None) => {
-            if state.storage.get_tournament(id).await?.is_none() {
+            let visible = state
+                .storage
+                .get_tournament(id)
+                .await?
+                .is_some_and(|t| !t.sealed || caller.can_organise());
+            if !visible {
                 return Err(ApiError::NotFound(format!("no tournament {id}")));
             }
             Scope::Tournament(id)

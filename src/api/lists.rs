@@ -63,6 +63,7 @@ impl MatchListQuery {
                 maze_id: self.maze_id,
                 status,
                 before: self.before,
+                hide_sealed: true,
             },
             page(self.offset, self.limit)?,
         ))

@@ -195,6 +195,19 @@ async fn create_match(
         return Err(hidden_error(maze.maze_id, &caller));
     }
     check_capacity(&state, 1).await?;
+    let now = crate::storage::now_ms();
+    if let Some((message, quota)) =
+        crate::registry::competitions::check_practice(&state.storage, bot.bot_id, maze.maze_id, now)
+            .await?
+    {
+        let wait_ms = quota
+            .next_at
+            .map_or(crate::competition::DAY_MS, |t| t - now);
+        return Err(ApiError::TooManyRequests {
+            message,
+            retry_after_secs: (wait_ms.max(0) as u64).div_ceil(1000).max(1),
+        });
+    }
     if !caller.is_admin() {
         if let Some(cap) = state.settings.max_stored_bytes_per_owner {
             let stored = state.storage.stored_bytes_of_owner_of(bot.bot_id).await?;
@@ -254,7 +267,7 @@ async fn get_match(
     caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<MatchView>> {
-    let row = find_match(&state, id).await?;
+    let row = find_match(&state, &caller, id).await?;
     let reveal = !row.maze_hidden || caller.is_admin();
     Ok(axum::Json(match_view(row, reveal)))
 }
@@ -306,7 +319,8 @@ async fn list_matches(
     caller: Caller,
     AppQuery(q): AppQuery<MatchListQuery>,
 ) -> ApiResult<axum::Json<MatchPage>> {
-    let (filter, page) = q.parse()?;
+    let (mut filter, page) = q.parse()?;
+    filter.hide_sealed = !caller.can_organise();
     let (rows, count) = state.storage.list_matches(&filter, page).await?;
     let next_before = next_before(&rows, page);
     let admin = caller.is_admin();
@@ -340,7 +354,7 @@ async fn get_match_replay(
     caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<ReplayView>> {
-    let row = find_match(&state, id).await?;
+    let row = find_match(&state, &caller, id).await?;
     if row.maze_hidden && !caller.is_admin() {
         let msg = format!(
             "match {id} was played on a hidden (ranking) maze: its replay would show the maze, \
@@ -399,7 +413,7 @@ async fn get_match_log(
     caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<LogView>> {
-    let row = find_match(&state, id).await?;
+    let row = find_match(&state, &caller, id).await?;
     caller.require_owner(&state, row.bot_id).await?;
     let error = row.summary().error;
     let redacted = row.maze_hidden && !caller.is_admin();
@@ -436,11 +450,15 @@ pub(super) fn paused_error(bot_id: i64, reason: &str) -> ApiError {
     ))
 }
 
-async fn find_match(state: &AppState, id: i64) -> ApiResult<MatchRow> {
+/// Match `id` if `caller` may see it: a sealed tournament's match (a competition's
+/// private set before its close, its final run before the results) is not found for
+/// anyone but the admin and the organisers.
+async fn find_match(state: &AppState, caller: &Caller, id: i64) -> ApiResult<MatchRow> {
     state
         .storage
         .get_match(id)
         .await?
+        .filter(|m| !m.sealed || caller.can_organise())
         .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))
 }
 

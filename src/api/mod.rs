@@ -7,6 +7,7 @@
 
 pub mod auth;
 pub mod bots;
+pub mod competitions;
 pub mod connections;
 pub mod entrants;
 pub mod error;
@@ -152,6 +153,7 @@ pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
     let (router, mut doc) = OpenApiRouter::with_openapi(ApiDoc::openapi())
         .merge(bots::router())
         .merge(entrants::router())
+        .merge(competitions::router())
         .merge(mazes::router())
         .merge(matches::router())
         .merge(tournaments::router())

@@ -154,6 +154,7 @@ async fn get_tournament(
         .storage
         .get_tournament(id)
         .await?
+        .filter(|t| !t.sealed || caller.can_organise())
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
     let (standings, standings_sealed) = super::leaderboard::tournament_for_caller(
         state.storage.leaderboard(Scope::Tournament(id)).await?,
@@ -217,10 +218,14 @@ pub struct TournamentPage {
     responses((status = 200, body = TournamentPage), (status = 400, body = ErrorBody)))]
 async fn list_tournaments(
     State(state): State<AppState>,
+    caller: Caller,
     AppQuery(q): AppQuery<TournamentListQuery>,
 ) -> ApiResult<axum::Json<TournamentPage>> {
     let page = super::lists::page(q.offset, q.limit)?;
-    let (rows, total) = state.storage.list_tournaments(page).await?;
+    let (rows, total) = state
+        .storage
+        .list_tournaments(page, !caller.can_organise())
+        .await?;
     Ok(axum::Json(TournamentPage {
         items: rows
             .into_iter()

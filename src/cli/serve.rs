@@ -34,6 +34,10 @@ pub const DEFAULT_MAZES: &[(&str, &str)] = &[
 ];
 
 /// Settings of `mazearena serve`; every flag can also come from its `MAZEARENA_*` variable.
+/// How often the competitions' clock runs: a ready version is queued on its
+/// competition's ranking sets within this long.
+const COMPETITION_TICK: Duration = Duration::from_millis(500);
+
 #[derive(Debug, Args)]
 pub struct ServeArgs {
     /// Address to listen on (port 0: any free port; the chosen address is printed).
@@ -294,6 +298,30 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
                         tracing::info!(count, bytes, "removed the traces of old practice matches")
                     }
                     Err(e) => tracing::warn!(error = %e, "cannot prune old practice matches"),
+                }
+            }
+        });
+    }
+    {
+        // The competitions' clock: ranks new versions, and closes competitions on time.
+        let storage = storage.clone();
+        tokio::spawn(async move {
+            let mut every = tokio::time::interval(COMPETITION_TICK);
+            every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+            loop {
+                every.tick().await;
+                let now = crate::storage::now_ms();
+                match crate::registry::competitions::tick(&storage, now).await {
+                    Ok(r) if r != Default::default() => tracing::info!(
+                        ranked = r.ranked,
+                        selected = r.selected,
+                        finalized = r.finalized,
+                        "competitions moved on"
+                    ),
+                    Ok(_) => {}
+                    Err(e) => {
+                        tracing::warn!(error = %e, "the competitions' clock failed; trying again")
+                    }
                 }
             }
         });

@@ -18,6 +18,7 @@
 pub mod bots;
 pub mod bundles;
 pub mod cache;
+pub mod competitions;
 pub mod mazes;
 pub mod migrate;
 pub mod tokens;

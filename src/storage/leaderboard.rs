@@ -11,9 +11,10 @@ use crate::engine::score::DNF_SCORE;
 pub enum Scope {
     /// One tournament's matches, per bot version in it.
     Tournament(i64),
-    /// Each bot's latest version, on hidden (ranking) mazes.
+    /// Each bot's latest version, on hidden (ranking) mazes: the default competition
+    /// (matches of other competitions do not count).
     Ranking,
-    /// Each bot's latest version, on every maze.
+    /// Each bot's latest version, on every maze (outside competitions).
     All,
 }
 
@@ -47,8 +48,9 @@ pub struct Standing {
 }
 
 impl Storage {
-    /// The bot versions (bot id, version) with a match on a hidden maze still queued or
-    /// running: their standings move with each such match as it ends.
+    /// The bot versions (bot id, version) with a match on a hidden maze outside the
+    /// competitions still queued or running: their standings move with each such match
+    /// as it ends.
     ///
     /// # Errors
     /// Database failures.
@@ -57,7 +59,9 @@ impl Storage {
             "select distinct v.bot_id, v.version from match m
              join maze z on z.maze_id = m.maze_id
              join bot_version v on v.bot_version_id = m.bot_version_id
-             where z.hidden and m.status in ('queued', 'running')",
+             where z.hidden = 1 and m.status in ('queued', 'running')
+                 and not exists (select 1 from tournament t
+                                 where t.tournament_id = m.tournament_id and t.competition_id is not null)",
         )
         .fetch_all(self.pool())
         .await?)
@@ -74,10 +78,12 @@ impl Storage {
         let filter = match scope {
             Scope::Tournament(_) => "s.tournament_id = $1",
             Scope::Ranking => {
-                "s.tournament_id = -1 and s.hidden = 1 and cast($1 as bigint) is null and v.version = b.latest"
+                "s.tournament_id >= 0 and s.tournament_id not in (select tournament_id from tournament where competition_id is not null)
+                 and s.hidden = 1 and cast($1 as bigint) is null and v.version = b.latest"
             }
             Scope::All => {
-                "s.tournament_id = -1 and cast($1 as bigint) is null and v.version = b.latest"
+                "s.tournament_id >= 0 and s.tournament_id not in (select tournament_id from tournament where competition_id is not null)
+                 and cast($1 as bigint) is null and v.version = b.latest"
             }
         };
         let sql = format!(
@@ -110,10 +116,12 @@ impl Storage {
         let filter = match scope {
             Scope::Tournament(_) => "m.tournament_id = $1",
             Scope::Ranking => {
-                "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)"
+                "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)
+                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
             }
             Scope::All => {
-                "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)"
+                "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)
+                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
             }
         };
         let sql = format!(

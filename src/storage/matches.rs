@@ -68,6 +68,10 @@ pub struct MatchRow {
     pub started_at: Option<i64>,
     /// Finished at (unix ms).
     pub finished_at: Option<i64>,
+    /// Whether its tournament is sealed (a competition's private set before the close,
+    /// its final run before the results): for the admin and organisers only.
+    #[sqlx(try_from = "super::Flag")]
+    pub sealed: bool,
 }
 
 impl MatchRow {
@@ -118,8 +122,8 @@ impl MatchRow {
 
 /// The order in which queued matches are played ([`Storage::claim_next`]): the next
 /// match is the first waiting match of the lane least recently served, in the class of
-/// lanes least recently served (table `queue_lane`). A lane is one owner's single matches
-/// or one tournament; the classes are single matches and tournaments. So while both
+/// lanes least recently served (table `queue_lane`). A lane is one owner's single matches,
+/// one tournament, or one competition's tournaments; the classes are single matches and tournaments. So while both
 /// wait, tournaments get every other match whatever is queued, and among single matches
 /// the owners take turns: a single match that is first in its owner's lane is played
 /// after at most one match of each other owner's lane and as many tournament matches,
@@ -139,8 +143,10 @@ const FAIR_ORDER: &str = "
             and cast($4 as bigint) is null
         group by coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash)
         union all
-        -- Tournaments: each one's first ready waiting match (an index seek each).
-        select 't:' || cast(t.tournament_id as text), 'class:t',
+        -- Tournaments: each one's first ready waiting match (an index seek each). The
+        -- tournaments of one competition share its lane.
+        select coalesce('c:' || cast(t.competition_id as text), 't:' || cast(t.tournament_id as text)),
+            'class:t',
             (select m.match_id from match m
              join bot_version v on v.bot_version_id = m.bot_version_id
              join bot b on b.bot_id = v.bot_id
@@ -171,7 +177,9 @@ const MARK_SERVED: &str = "
     from (
         select case when m.tournament_id is null
                 then coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash)
-                else 't:' || cast(m.tournament_id as text) end as lane
+                else coalesce((select 'c:' || cast(t.competition_id as text) from tournament t
+                               where t.tournament_id = m.tournament_id),
+                              't:' || cast(m.tournament_id as text)) end as lane
         from match m join bot b on b.bot_id = m.bot_id where m.match_id = $1
         union all
         select case when m.tournament_id is null then 'class:s' else 'class:t' end
@@ -201,6 +209,9 @@ pub struct ClaimedMatch {
     pub tournament_id: Option<i64>,
     /// Environment variables declared for the bot version (JSON object).
     pub env: String,
+    /// The tournament's match limits (JSON, [`crate::competition::Limits`]), if it has
+    /// its own.
+    pub limits: Option<String>,
 }
 
 /// A record ready to be written: the row's summary (JSON) and the compact record.
@@ -264,6 +275,9 @@ pub struct MatchFilter {
     /// Only matches older than this one (smaller ids): the page after a page that ends
     /// with it. Unlike an offset, it costs the same however deep the page.
     pub before: Option<i64>,
+    /// Leave out the matches of sealed tournaments (for anyone but the admin and the
+    /// organisers).
+    pub hide_sealed: bool,
 }
 
 /// How many matches pass a filter, counted up to [`COUNT_CAP`] so that a count costs
@@ -291,7 +305,8 @@ pub struct Page {
 /// A match's columns with its names (for [`Storage::match_select`]).
 const MATCH_COLUMNS: &str = "m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
         z.name as maze_name, z.hidden as maze_hidden, z.hash as maze_hash, z.dim as maze_dim, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
-        m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at";
+        m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at,
+        coalesce((select t.sealed from tournament t where t.tournament_id = m.tournament_id), 0) as sealed";
 
 impl Storage {
     /// The select of a match with its names, for a where clause on `match m` to follow.
@@ -458,7 +473,8 @@ impl Storage {
         let Some(id) = id else { return Ok(None) };
         Ok(sqlx::query_as(
             "select m.match_id, m.seed, v.command, v.dir, v.bundle_sha256, v.built_sha256,
-                 z.layout, m.tournament_id, v.env
+                 z.layout, m.tournament_id, v.env,
+                 (select t.limits from tournament t where t.tournament_id = m.tournament_id) as limits
              from match m join bot_version v on v.bot_version_id = m.bot_version_id
              join maze z on z.maze_id = m.maze_id where m.match_id = $1",
         )
@@ -800,6 +816,11 @@ fn filter_clause(filter: &MatchFilter, keyset: bool) -> (String, Vec<FilterValue
     }
     if let Some(before) = filter.before.filter(|_| keyset) {
         add("match_id", "<", FilterValue::Id(before));
+    }
+    if filter.hide_sealed {
+        clause.push_str(
+            " and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.sealed = 1)",
+        );
     }
     (clause, values)
 }

@@ -13,6 +13,7 @@
 pub mod bots;
 pub mod builds;
 pub mod bundles;
+pub mod competitions;
 pub mod entrants;
 pub mod leaderboard;
 pub mod matches;

@@ -20,9 +20,15 @@ pub struct TournamentRow {
     pub total: i64,
     /// Matches played (any final status).
     pub done: i64,
+    /// The competition it ranks for, if any.
+    pub competition_id: Option<i64>,
+    /// Whether its matches and numbers are for the admin and organisers only.
+    #[sqlx(try_from = "super::Flag")]
+    pub sealed: bool,
 }
 
-const TOURNAMENT_SELECT: &str = "select t.tournament_id, t.name, t.repeats, t.created_at,
+const TOURNAMENT_SELECT: &str =
+    "select t.tournament_id, t.name, t.repeats, t.created_at, t.competition_id, t.sealed,
          (select count(*) from match where tournament_id = t.tournament_id) as total,
          (select count(*) from match where tournament_id = t.tournament_id
              and status not in ('queued', 'running')) as done
@@ -100,19 +106,29 @@ impl Storage {
         )
     }
 
-    /// One page of tournaments, newest first, and how many there are.
+    /// One page of tournaments, newest first, and how many there are; with
+    /// `hide_sealed`, without the sealed ones.
     ///
     /// # Errors
     /// Database failures.
-    pub async fn list_tournaments(&self, page: Page) -> Result<(Vec<TournamentRow>, i64)> {
+    pub async fn list_tournaments(
+        &self,
+        page: Page,
+        hide_sealed: bool,
+    ) -> Result<(Vec<TournamentRow>, i64)> {
+        let filter = if hide_sealed {
+            "where t.sealed = 0"
+        } else {
+            ""
+        };
         let rows = sqlx::query_as(&format!(
-            "{TOURNAMENT_SELECT} order by t.tournament_id desc limit $1 offset $2"
+            "{TOURNAMENT_SELECT} {filter} order by t.tournament_id desc limit $1 offset $2"
         ))
         .bind(page.limit)
         .bind(page.offset)
         .fetch_all(self.pool())
         .await?;
-        let total = sqlx::query_scalar("select count(*) from tournament")
+        let total = sqlx::query_scalar(&format!("select count(*) from tournament t {filter}"))
             .fetch_one(self.pool())
             .await?;
         Ok((rows, total))

@@ -5,6 +5,7 @@ mod authors;
 mod bots;
 mod browser;
 mod cli;
+mod competitions;
 mod connections;
 mod contain;
 mod faults;

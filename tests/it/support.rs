@@ -194,8 +194,21 @@ impl TestServer {
 
     /// [`TestServer::start`] with variables `env` set for the server.
     pub fn start_env(dir: &Path, extra: &[&str], env: &[(&str, &str)]) -> TestServer {
+        TestServer::start_on(dir, None, extra, env)
+    }
+
+    /// [`TestServer::start_env`] on `database` (default: SQLite in `dir`).
+    pub fn start_on(
+        dir: &Path,
+        database: Option<&str>,
+        extra: &[&str],
+        env: &[(&str, &str)],
+    ) -> TestServer {
         use std::io::BufRead;
-        let database = format!("sqlite://{}", dir.join("mazearena.db").display());
+        let database = database.map_or_else(
+            || format!("sqlite://{}", dir.join("mazearena.db").display()),
+            str::to_string,
+        );
         let mut command = Command::new(env!("CARGO_BIN_EXE_mazearena"));
         as_installed(&mut command);
         let mut child = command

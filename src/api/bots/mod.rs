@@ -259,7 +259,8 @@ async fn create_bot(
     responses(
         (status = 201, body = VersionView),
         (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
-        (status = 404, body = ErrorBody), (status = 422, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody),
+        (status = 422, body = ErrorBody), (status = 429, body = ErrorBody),
     ))]
 async fn create_bot_version(
     State(state): State<AppState>,
@@ -271,6 +272,22 @@ async fn create_bot_version(
         return Err(ApiError::NotFound(format!("no bot {id}")));
     }
     caller.require_owner(&state, id).await?;
+    let now = crate::storage::now_ms();
+    match registry::competitions::check_upload(&state.storage, id, now).await? {
+        None => {}
+        Some(registry::competitions::UploadRefusal::Closed(message)) => {
+            return Err(ApiError::Conflict(message));
+        }
+        Some(registry::competitions::UploadRefusal::Quota(message, quota)) => {
+            let wait_ms = quota
+                .next_at
+                .map_or(crate::competition::DAY_MS, |t| t - now);
+            return Err(ApiError::TooManyRequests {
+                message,
+                retry_after_secs: (wait_ms.max(0) as u64).div_ceil(1000).max(1),
+            });
+        }
+    }
     let (_, submission) = read_upload(&state, request).await?.submission()?;
     let row =
         registry::bots::add_version(&state.storage, id, submission, &state.settings.scratch())

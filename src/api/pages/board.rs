@@ -39,10 +39,13 @@ pub(super) async fn leaderboard_page(
     let hidden = mazes.iter().filter(|m| m.hidden).count();
     let (tournaments, _) = state
         .storage
-        .list_tournaments(Page {
-            offset: 0,
-            limit: RECENT,
-        })
+        .list_tournaments(
+            Page {
+                offset: 0,
+                limit: RECENT,
+            },
+            true,
+        )
         .await?;
     let storage = &state.storage;
     let state = &state;
@@ -56,7 +59,12 @@ pub(super) async fn leaderboard_page(
             ));
         }
         (Some(id), None) => {
-            if state.storage.get_tournament(id).await?.is_none() {
+            if state
+                .storage
+                .get_tournament(id)
+                .await?
+                .is_none_or(|t| t.sealed)
+            {
                 return Err(ApiError::NotFound(format!("no tournament {id}")));
             }
             (Scope::Tournament(id), board(Scope::Tournament(id)).await?)

@@ -62,8 +62,9 @@ fn line(row: MatchRow) -> MatchLine {
 /// The latest [`RECENT`] matches that pass `filter`, as lines, and how many pass it.
 async fn recent_matches(
     state: &AppState,
-    filter: MatchFilter,
+    mut filter: MatchFilter,
 ) -> ApiResult<(Vec<MatchLine>, MatchCount)> {
+    filter.hide_sealed = true;
     let page = Page {
         offset: 0,
         limit: RECENT,
@@ -105,6 +106,7 @@ async fn bot_page(
         &state,
         MatchFilter {
             bot_id: Some(id),
+            hide_sealed: true,
             ..MatchFilter::default()
         },
     )
@@ -134,6 +136,7 @@ async fn maze_page(
         &state,
         MatchFilter {
             maze_id: Some(id),
+            hide_sealed: true,
             ..MatchFilter::default()
         },
     )
@@ -196,6 +199,7 @@ async fn match_page(
         .storage
         .get_match(id)
         .await?
+        .filter(|m| !m.sealed)
         .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))?;
     let hidden = row.maze_hidden;
     let mut record: Option<MatchRecord> = None;
@@ -257,7 +261,7 @@ async fn tournaments_page(
     AppQuery(q): AppQuery<ListQuery>,
 ) -> ApiResult<Html<String>> {
     let page = page(q.offset, q.limit)?;
-    let (rows, total) = state.storage.list_tournaments(page).await?;
+    let (rows, total) = state.storage.list_tournaments(page, true).await?;
     let pager = Pager {
         base: "/tournaments".into(),
         offset: page.offset,
@@ -275,6 +279,7 @@ async fn tournament_page(
         .storage
         .get_tournament(id)
         .await?
+        .filter(|t| !t.sealed)
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
     let (standings, sealed) = tournament_for_caller(
         state.storage.leaderboard(Scope::Tournament(id)).await?,

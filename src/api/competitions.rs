@@ -1,0 +1,672 @@
+//! Competitions: created and edited by organisers (and the admin), entered by entrants
+//! (their key), ranked by the server's clock, with a public and a private leaderboard,
+//! "my submissions" for an entrant, and the final results (JSON and CSV).
+//!
+//! What is sealed stays sealed for anyone but the admin and the organisers: the private
+//! board before the close; the private set's and final run's tournaments and matches
+//! (not found) until the close and the results; the seeds until the results.
+
+use axum::extract::State;
+use axum::http::{StatusCode, header};
+use axum::response::IntoResponse;
+use serde::{Deserialize, Serialize};
+use utoipa::{IntoParams, ToSchema};
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
+
+use super::AppState;
+use super::auth::{Caller, hash_token, new_token};
+use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
+use crate::competition::{Limits, MazeText, Phase, Quota, Rule, Spec, Timestamp};
+use crate::registry::competitions::{self as ops, Board, BoardKind, BoardLine, Patch};
+use crate::storage::competitions::{CompetitionRow, ResultRow};
+use crate::storage::entrants::EntrantRow;
+use crate::storage::leaderboard::Scope;
+use crate::storage::now_ms;
+
+pub(super) fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(create_organiser))
+        .routes(routes!(list_competitions, create_competition))
+        .routes(routes!(get_competition, edit_competition))
+        .routes(routes!(enter))
+        .routes(routes!(leaderboard))
+        .routes(routes!(submissions))
+        .routes(routes!(choose))
+        .routes(routes!(results))
+        .routes(routes!(results_csv))
+}
+
+/// A new organiser.
+#[derive(Debug, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OrganiserRequest {
+    /// Unique name (1 to 64 characters).
+    pub name: String,
+}
+
+/// A new organiser and its key (shown once).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct OrganiserCreated {
+    /// Id.
+    pub organiser_id: i64,
+    /// Name.
+    pub name: String,
+    /// The organiser's key: manages competitions and sees what they seal (`Authorization:
+    /// Bearer KEY`). Shown once.
+    pub key: String,
+}
+
+/// Register an organiser (admin only): manages competitions, reads no other secret.
+#[utoipa::path(post, path = "/api/organisers", tag = "competitions",
+    request_body = OrganiserRequest, security(("bearer" = [])),
+    responses((status = 201, body = OrganiserCreated), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody), (status = 409, body = ErrorBody)))]
+async fn create_organiser(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppJson(body): AppJson<OrganiserRequest>,
+) -> ApiResult<(StatusCode, axum::Json<OrganiserCreated>)> {
+    caller.require_admin()?;
+    let name = body.name.trim();
+    if name.is_empty() || name.chars().count() > 64 {
+        return Err(ApiError::BadRequest(
+            "an organiser's name is 1 to 64 characters".into(),
+        ));
+    }
+    let key = new_token()?;
+    let organiser_id = state
+        .storage
+        .create_organiser(name, &hash_token(&key))
+        .await?;
+    Ok((
+        StatusCode::CREATED,
+        axum::Json(OrganiserCreated {
+            organiser_id,
+            name: name.to_string(),
+            key,
+        }),
+    ))
+}
+
+/// A competition's maze as anyone sees it: a practice maze by id (its layout is public);
+/// a ranking maze by name only (organisers also see its id and hash).
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MazeLine {
+    /// `practice`, `public` or `private`.
+    pub set: String,
+    /// Its name.
+    pub name: String,
+    /// Its id (practice mazes; every maze for organisers, or once revealed).
+    pub maze_id: Option<i64>,
+    /// SHA-256 of its canonical text (the same).
+    pub hash: Option<String>,
+}
+
+/// A competition as the caller may see it.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct CompetitionView {
+    /// Short unique name (in addresses).
+    pub name: String,
+    /// Title.
+    pub title: String,
+    /// Description (text).
+    pub description: String,
+    /// Rules (text).
+    pub rules: String,
+    /// `default` (the server's ranking) or `competition`.
+    pub kind: String,
+    /// Where it stands now.
+    pub phase: Phase,
+    /// `final` once the results are written; `final_run` while the final run plays.
+    pub state: Option<String>,
+    /// Opening.
+    pub opens_at: Option<Timestamp>,
+    /// When the public board freezes.
+    pub freezes_at: Option<Timestamp>,
+    /// Close.
+    pub closes_at: Option<Timestamp>,
+    /// Matches per version per ranking maze.
+    pub repeats: i64,
+    /// The final run's matches per selected version per private maze (0: none).
+    pub final_repeats: i64,
+    /// Versions per entrant per 24 hours.
+    pub versions_per_day: i64,
+    /// Practice matches per entrant per 24 hours.
+    pub practice_per_day: i64,
+    /// The final selection rule.
+    pub selection: String,
+    /// With `choice`: the most versions an entrant may choose.
+    pub max_selected: i64,
+    /// Whether the private mazes are shown with the results.
+    pub reveal_private_mazes: bool,
+    /// The match limits (those left out are the server's).
+    pub limits: Limits,
+    /// Its mazes.
+    pub mazes: Vec<MazeLine>,
+    /// Entrants with a bot in it.
+    pub entrants: usize,
+    /// The secret seeds (organisers; everyone once the results are final).
+    pub seeds: Option<Vec<i64>>,
+    /// The public set's tournament (its matches show how each went, not the scores).
+    pub public_tournament_id: Option<i64>,
+}
+
+async fn view(state: &AppState, c: &CompetitionRow, caller: &Caller) -> ApiResult<CompetitionView> {
+    let now = now_ms();
+    let timeline = ops::timeline(c);
+    let organiser = caller.can_organise();
+    let revealed = c.state.as_deref() == Some("final") && c.reveal_private_mazes;
+    let mazes = state
+        .storage
+        .competition_mazes(c.competition_id)
+        .await?
+        .into_iter()
+        .map(|m| {
+            let shown =
+                organiser || m.maze_set == "practice" || (revealed && m.maze_set == "private");
+            MazeLine {
+                set: m.maze_set,
+                name: m.name,
+                maze_id: shown.then_some(m.maze_id),
+                hash: shown.then_some(m.hash),
+            }
+        })
+        .collect();
+    let seeds = (organiser || c.state.as_deref() == Some("final")).then(|| c.seed_list());
+    Ok(CompetitionView {
+        name: c.name.clone(),
+        title: c.title.clone(),
+        description: c.description.clone(),
+        rules: c.rules.clone(),
+        kind: c.kind.clone(),
+        phase: ops::phase(c, now),
+        state: c.state.clone(),
+        opens_at: c.opens_at.map(Timestamp),
+        freezes_at: timeline.and_then(|t| t.frozen_from()).map(Timestamp),
+        closes_at: c.closes_at.map(Timestamp),
+        repeats: c.repeats,
+        final_repeats: c.final_repeats,
+        versions_per_day: c.versions_per_day,
+        practice_per_day: c.practice_per_day,
+        selection: c.selection.clone(),
+        max_selected: c.max_selected,
+        reveal_private_mazes: c.reveal_private_mazes,
+        limits: c.limit_set(),
+        mazes,
+        entrants: state
+            .storage
+            .competition_entries(c.competition_id)
+            .await?
+            .len(),
+        seeds,
+        public_tournament_id: c.public_tournament_id,
+    })
+}
+
+async fn find(state: &AppState, name: &str) -> ApiResult<CompetitionRow> {
+    state
+        .storage
+        .get_competition(name)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no competition {name:?}")))
+}
+
+/// The competitions, the server's default ranking first.
+#[utoipa::path(get, path = "/api/competitions", tag = "competitions",
+    responses((status = 200, body = [CompetitionView])))]
+async fn list_competitions(
+    State(state): State<AppState>,
+    caller: Caller,
+) -> ApiResult<axum::Json<Vec<CompetitionView>>> {
+    let mut out = Vec::new();
+    for c in state.storage.list_competitions().await? {
+        out.push(view(&state, &c, &caller).await?);
+    }
+    Ok(axum::Json(out))
+}
+
+/// Create a competition (organisers and the admin): its settings and its three maze
+/// sets, each maze given by its text (numeric or ASCII format).
+#[utoipa::path(post, path = "/api/competitions", tag = "competitions",
+    request_body = Spec<MazeText>, security(("bearer" = [])),
+    responses((status = 201, body = CompetitionView), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 409, body = ErrorBody), (status = 422, body = ErrorBody)))]
+async fn create_competition(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppJson(spec): AppJson<Spec<MazeText>>,
+) -> ApiResult<(StatusCode, axum::Json<CompetitionView>)> {
+    caller.require_organiser()?;
+    let c = ops::create(&state.storage, spec).await?;
+    Ok((
+        StatusCode::CREATED,
+        axum::Json(view(&state, &c, &caller).await?),
+    ))
+}
+
+/// A competition: timeline, phase, rules, mazes (ranking mazes by name only).
+#[utoipa::path(get, path = "/api/competitions/{name}", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    responses((status = 200, body = CompetitionView), (status = 404, body = ErrorBody)))]
+async fn get_competition(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<axum::Json<CompetitionView>> {
+    let c = find(&state, &name).await?;
+    Ok(axum::Json(view(&state, &c, &caller).await?))
+}
+
+/// Edit a competition (organisers and the admin). Once open its opening stays; once
+/// closed only its texts change. A close moved to now (or earlier) closes it now.
+#[utoipa::path(patch, path = "/api/competitions/{name}", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    request_body = Patch, security(("bearer" = [])),
+    responses((status = 200, body = CompetitionView), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody), (status = 422, body = ErrorBody)))]
+async fn edit_competition(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+    AppJson(patch): AppJson<Patch>,
+) -> ApiResult<axum::Json<CompetitionView>> {
+    caller.require_organiser()?;
+    let c = find(&state, &name).await?;
+    let c = ops::edit(&state.storage, c, patch, now_ms()).await?;
+    Ok(axum::Json(view(&state, &c, &caller).await?))
+}
+
+/// The entrant whose key the caller gave.
+async fn entrant(state: &AppState, caller: &Caller) -> ApiResult<EntrantRow> {
+    let none = || {
+        ApiError::Unauthorized(
+            "this needs an entrant's key (Authorization: Bearer KEY; POST /api/entrants gives one)"
+                .into(),
+        )
+    };
+    match caller {
+        Caller::Token(hash) => state.storage.entrant_by_key(hash).await?.ok_or_else(none),
+        Caller::Anonymous => Err(none()),
+        _ => Err(ApiError::Forbidden("this needs an entrant's key".into())),
+    }
+}
+
+/// A bot to enter.
+#[derive(Debug, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EntryRequest {
+    /// One of the entrant's bots (registered with its key).
+    pub bot_id: i64,
+}
+
+/// An entry.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct EntryView {
+    /// The competition.
+    pub competition: String,
+    /// The bot entered.
+    pub bot_id: i64,
+    /// The entrant.
+    pub entrant: String,
+}
+
+/// Enter one of the entrant's bots (the entrant's key; one bot per entrant). Its latest
+/// version and every later one are ranked automatically once the competition is open.
+#[utoipa::path(post, path = "/api/competitions/{name}/entries", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    request_body = EntryRequest, security(("bearer" = [])),
+    responses((status = 201, body = EntryView), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody), (status = 422, body = ErrorBody)))]
+async fn enter(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+    AppJson(body): AppJson<EntryRequest>,
+) -> ApiResult<(StatusCode, axum::Json<EntryView>)> {
+    let c = find(&state, &name).await?;
+    let e = entrant(&state, &caller).await?;
+    if c.kind != "competition" {
+        return Err(ApiError::Conflict(
+            "the default competition needs no entry: every bot's latest version counts".into(),
+        ));
+    }
+    if ops::phase(&c, now_ms()) == Phase::Closed {
+        return Err(ApiError::Conflict(format!(
+            "competition {} closed at {} UTC",
+            c.name,
+            Timestamp(c.closes_at.unwrap_or(0)).rfc3339()
+        )));
+    }
+    let bot = state
+        .storage
+        .get_bot(body.bot_id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no bot {}", body.bot_id)))?;
+    if state.storage.entrant_of_bot(bot.bot_id).await? != Some(e.entrant_id) {
+        return Err(ApiError::Forbidden(format!(
+            "bot {} is not this entrant's (register it with the entrant's key)",
+            bot.bot_id
+        )));
+    }
+    state
+        .storage
+        .enter_competition(c.competition_id, bot.bot_id, e.entrant_id)
+        .await?;
+    Ok((
+        StatusCode::CREATED,
+        axum::Json(EntryView {
+            competition: c.name,
+            bot_id: bot.bot_id,
+            entrant: e.name,
+        }),
+    ))
+}
+
+/// Which board.
+#[derive(Debug, Deserialize, IntoParams)]
+#[serde(deny_unknown_fields)]
+pub struct BoardQuery {
+    /// `public` (default) or `private`.
+    pub board: Option<BoardKind>,
+}
+
+/// A leaderboard of the competition: `public` (the public ranking set; frozen before
+/// the close if the competition says so) or `private` (sealed until the close for
+/// anyone but organisers). Each entrant's latest version that has played all its
+/// matches there.
+#[utoipa::path(get, path = "/api/competitions/{name}/leaderboard", tag = "competitions",
+    params(("name" = String, Path, description = "competition name"), BoardQuery),
+    responses((status = 200, body = Board), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
+async fn leaderboard(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+    AppQuery(q): AppQuery<BoardQuery>,
+) -> ApiResult<axum::Json<Board>> {
+    let c = find(&state, &name).await?;
+    let kind = q.board.unwrap_or(BoardKind::Public);
+    if c.kind == "default" {
+        return Ok(axum::Json(default_board(&state, &caller, kind).await?));
+    }
+    Ok(axum::Json(
+        ops::board(&state.storage, &c, kind, caller.can_organise(), now_ms()).await?,
+    ))
+}
+
+/// The default competition's board: the server's ranking (no private set).
+pub(super) async fn default_board(
+    state: &AppState,
+    caller: &Caller,
+    kind: BoardKind,
+) -> ApiResult<Board> {
+    if kind == BoardKind::Private {
+        return Err(ApiError::NotFound(
+            "the default competition has no private set".into(),
+        ));
+    }
+    let rows = state.storage.leaderboard(Scope::Ranking).await?;
+    let rows = super::leaderboard::settled_for_caller(state, rows, caller).await?;
+    Ok(Board {
+        board: kind,
+        sealed: false,
+        frozen_at: None,
+        standings: rows
+            .into_iter()
+            .map(|r| BoardLine {
+                rank: r.rank,
+                entrant: String::new(),
+                bot_id: r.bot_id,
+                bot_name: r.name,
+                version: r.version,
+                played: r.played,
+                finished: r.finished,
+                mean_score: r.mean_score,
+                finish_rate: r.finish_rate,
+            })
+            .collect(),
+    })
+}
+
+/// One of the entrant's versions.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct SubmissionView {
+    /// Its number.
+    pub version: i64,
+    /// Uploaded at.
+    pub uploaded_at: Timestamp,
+    /// `ready`, `building` or `build_failed`.
+    pub build_status: String,
+    /// `waiting` (not yet queued), `playing`, `ranked` (all its public matches
+    /// played), `not_counted` (failed to build, or the server could not play it).
+    pub status: String,
+    /// Its public-ranking numbers, once all its public matches are played.
+    pub public: Option<BoardLine>,
+    /// Chosen for the final (`choice` rule).
+    pub chosen: bool,
+    /// Taken by the final selection.
+    pub selected: bool,
+}
+
+/// The entrant's submissions and quotas.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct SubmissionsView {
+    /// The competition.
+    pub competition: String,
+    /// The entrant.
+    pub entrant: String,
+    /// The bot entered (none yet: enter one).
+    pub bot_id: Option<i64>,
+    /// Versions, newest first.
+    pub versions: Vec<SubmissionView>,
+    /// The version quota now.
+    pub versions_quota: Quota,
+    /// The practice quota now.
+    pub practice_quota: Quota,
+}
+
+/// "My submissions": the entrant's versions (the entrant's key), their status, their own
+/// public-ranking numbers once played, and the quotas ("2 of 5 versions used in the
+/// last 24 hours; the next one at ...").
+#[utoipa::path(get, path = "/api/competitions/{name}/submissions", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")), security(("bearer" = [])),
+    responses((status = 200, body = SubmissionsView), (status = 401, body = ErrorBody),
+        (status = 403, body = ErrorBody), (status = 404, body = ErrorBody)))]
+async fn submissions(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<axum::Json<SubmissionsView>> {
+    let c = find(&state, &name).await?;
+    let e = entrant(&state, &caller).await?;
+    let now = now_ms();
+    let entry = state
+        .storage
+        .competition_entries(c.competition_id)
+        .await?
+        .into_iter()
+        .find(|x| x.entrant_id == e.entrant_id);
+    let public = match c.public_tournament_id {
+        Some(t) => state.storage.competition_board(t, false).await?,
+        None => Vec::new(),
+    };
+    let pending_public = |id: i64| public.iter().any(|r| r.bot_version_id == id && r.pending);
+    let mut versions = Vec::new();
+    for s in state.storage.submissions(&c, e.entrant_id).await? {
+        let line = public
+            .iter()
+            .find(|r| r.bot_version_id == s.bot_version_id && !r.pending)
+            .map(|r| BoardLine {
+                rank: 0,
+                entrant: e.name.clone(),
+                bot_id: r.bot_id,
+                bot_name: r.bot_name.clone(),
+                version: r.version,
+                played: r.played,
+                finished: r.finished,
+                mean_score: r.mean_score,
+                finish_rate: r.finish_rate,
+            });
+        let status = if s.build_status == "build_failed" || s.aborted {
+            "not_counted"
+        } else if line.is_some() {
+            "ranked"
+        } else if s.ranked || pending_public(s.bot_version_id) {
+            "playing"
+        } else {
+            "waiting"
+        };
+        versions.push(SubmissionView {
+            version: s.version,
+            uploaded_at: Timestamp(s.created_at),
+            build_status: s.build_status,
+            status: status.to_string(),
+            public: line,
+            chosen: s.chosen,
+            selected: s.selected,
+        });
+    }
+    Ok(axum::Json(SubmissionsView {
+        competition: c.name.clone(),
+        entrant: e.name.clone(),
+        bot_id: entry.map(|x| x.bot_id),
+        versions,
+        versions_quota: ops::version_quota(&state.storage, &c, e.entrant_id, now).await?,
+        practice_quota: ops::practice_quota(&state.storage, &c, e.entrant_id, now).await?,
+    }))
+}
+
+/// The versions an entrant chooses for the final.
+#[derive(Debug, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ChoiceRequest {
+    /// Version numbers of the entered bot (at most the competition's `max_selected`).
+    pub versions: Vec<i64>,
+}
+
+/// Choose the versions that count at the end (the entrant's key; competitions with the
+/// `choice` rule; before the close).
+#[utoipa::path(put, path = "/api/competitions/{name}/selection", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    request_body = ChoiceRequest, security(("bearer" = [])),
+    responses((status = 204), (status = 400, body = ErrorBody), (status = 401, body = ErrorBody),
+        (status = 403, body = ErrorBody), (status = 404, body = ErrorBody),
+        (status = 409, body = ErrorBody), (status = 422, body = ErrorBody)))]
+async fn choose(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+    AppJson(body): AppJson<ChoiceRequest>,
+) -> ApiResult<StatusCode> {
+    let c = find(&state, &name).await?;
+    let e = entrant(&state, &caller).await?;
+    if Rule::parse(&c.selection) != Some(Rule::Choice) {
+        return Err(ApiError::Conflict(format!(
+            "competition {} selects by `{}`: there is nothing to choose",
+            c.name, c.selection
+        )));
+    }
+    if ops::phase(&c, now_ms()) == Phase::Closed {
+        return Err(ApiError::Conflict(format!(
+            "competition {} is closed",
+            c.name
+        )));
+    }
+    if body.versions.len() > c.max_selected as usize {
+        return Err(ApiError::BadRequest(format!(
+            "at most {} versions may be chosen",
+            c.max_selected
+        )));
+    }
+    let mine = state.storage.submissions(&c, e.entrant_id).await?;
+    let mut ids = Vec::new();
+    for v in &body.versions {
+        let s = mine
+            .iter()
+            .find(|s| s.version == *v && s.ranked)
+            .ok_or_else(|| {
+                ApiError::BadRequest(format!(
+                    "version {v} is not one of this entrant's ranked versions"
+                ))
+            })?;
+        ids.push(s.bot_version_id);
+    }
+    state
+        .storage
+        .choose_versions(&c, e.entrant_id, &ids)
+        .await?;
+    Ok(StatusCode::NO_CONTENT)
+}
+
+/// The final results.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct ResultsView {
+    /// The competition.
+    pub competition: String,
+    /// When they were written.
+    pub finalized_at: Timestamp,
+    /// The referee version that wrote them.
+    pub referee: String,
+    /// Whether every row equals a recount from the match records now.
+    pub recount_equal: bool,
+    /// One row per entrant, best first.
+    pub results: Vec<ResultRow>,
+}
+
+async fn final_results(
+    state: &AppState,
+    name: &str,
+) -> ApiResult<(CompetitionRow, Vec<ResultRow>)> {
+    let c = find(state, name).await?;
+    if c.state.as_deref() != Some("final") {
+        return Err(ApiError::Conflict(match c.closes_at {
+            Some(t) => format!(
+                "the results of competition {} come after its close ({} UTC) and its final run",
+                c.name,
+                Timestamp(t).rfc3339()
+            ),
+            None => "the default competition has no final results".into(),
+        }));
+    }
+    let rows = state.storage.competition_results(c.competition_id).await?;
+    Ok((c, rows))
+}
+
+/// The final results (after the close and the final run): one row per entrant with its
+/// manifest (bundle hash, referee version, maze hashes, seeds, limits, recount).
+#[utoipa::path(get, path = "/api/competitions/{name}/results", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    responses((status = 200, body = ResultsView), (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+async fn results(
+    State(state): State<AppState>,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<axum::Json<ResultsView>> {
+    let (c, rows) = final_results(&state, &name).await?;
+    let differ = ops::recount_differences(&state.storage, &c).await?;
+    Ok(axum::Json(ResultsView {
+        competition: c.name.clone(),
+        finalized_at: Timestamp(c.finalized_at.unwrap_or(0)),
+        referee: crate::runner::ENGINE_VERSION.to_string(),
+        recount_equal: differ.is_empty(),
+        results: rows,
+    }))
+}
+
+/// The final results as CSV (one row per entrant).
+#[utoipa::path(get, path = "/api/competitions/{name}/results.csv", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    responses((status = 200, content_type = "text/csv", body = String), (status = 404, body = ErrorBody),
+        (status = 409, body = ErrorBody)))]
+async fn results_csv(
+    State(state): State<AppState>,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<impl IntoResponse> {
+    let (_, rows) = final_results(&state, &name).await?;
+    Ok((
+        [(header::CONTENT_TYPE, "text/csv; charset=utf-8")],
+        ops::results_csv(&rows),
+    ))
+}

@@ -1,0 +1,824 @@
+//! Competitions, the operations the API, the command line and the server's clock share:
+//! creating one from its spec (admitting its mazes), editing it, entering a bot, the
+//! quotas, the boards as each caller may see them, and the clock's work ([`tick`]):
+//! ranking every new ready version automatically, and after the close the final
+//! selection, the final run and the results (an immutable snapshot checked against a
+//! recount of the match records).
+
+use serde::Serialize;
+
+use super::{RegistryError, Result};
+use crate::competition::selection::{self, Candidate, Rule, VersionScore};
+use crate::competition::spec::{self, check_schedule};
+use crate::competition::{
+    DAY_MS, Limits, MazeSets, MazeText, Phase, Quota, Spec, Timeline, Timestamp,
+};
+use crate::engine::mazefile;
+use crate::storage::Storage;
+use crate::storage::competitions::{BoardRow, CompetitionMaze, CompetitionRow, ResultRow};
+
+/// Seeds drawn for every competition: enough for the most ranking and final repeats.
+pub const SEEDS: usize = 70;
+
+/// The competition's timeline (`None` for the default competition).
+pub fn timeline(c: &CompetitionRow) -> Option<Timeline> {
+    Some(Timeline {
+        opens_at: c.opens_at?,
+        closes_at: c.closes_at?,
+        freeze_ms: c.freeze_ms,
+    })
+}
+
+/// Its phase at `now` (the default competition is always open).
+pub fn phase(c: &CompetitionRow, now: i64) -> Phase {
+    timeline(c).map_or(Phase::Open, |t| t.phase(now))
+}
+
+/// Creates a competition: checks its spec, admits its mazes (a practice maze must be
+/// public on this server, a ranking maze hidden; a layout stored already is reused if
+/// so), draws its secret seeds.
+///
+/// # Errors
+/// [`RegistryError::Invalid`] saying what is wrong (with the maze and its line for a bad
+/// maze), [`RegistryError::Conflict`] for a name taken, the database.
+pub async fn create(storage: &Storage, spec: Spec<MazeText>) -> Result<CompetitionRow> {
+    spec.check().map_err(|e| RegistryError::Invalid(e.0))?;
+    let mut ids: MazeSets<i64> = MazeSets {
+        practice: Vec::new(),
+        public: Vec::new(),
+        private: Vec::new(),
+    };
+    let sets = [
+        ("practice", &spec.mazes.practice),
+        ("public", &spec.mazes.public),
+        ("private", &spec.mazes.private),
+    ];
+    for (set, mazes) in sets {
+        let hidden = set != "practice";
+        for m in mazes {
+            let id = admit(storage, m, hidden).await.map_err(|e| match e {
+                RegistryError::Invalid(why) => {
+                    RegistryError::Invalid(format!("{set} maze {:?}: {why}", m.name))
+                }
+                other => other,
+            })?;
+            match set {
+                "practice" => ids.practice.push(id),
+                "public" => ids.public.push(id),
+                _ => ids.private.push(id),
+            }
+        }
+    }
+    let mut seeds = Vec::with_capacity(SEEDS);
+    let mut bytes = [0u8; 4 * SEEDS];
+    getrandom::fill(&mut bytes)
+        .map_err(|e| RegistryError::Internal(format!("no randomness: {e}")))?;
+    for chunk in bytes.chunks(4) {
+        seeds.push(i64::from(
+            u32::from_le_bytes(chunk.try_into().unwrap_or_default()) >> 1,
+        ));
+    }
+    Ok(storage
+        .create_competition(&spec.with_mazes(ids), &seeds)
+        .await?)
+}
+
+/// The stored maze of `m`'s layout, or `m` admitted; its visibility must be `hidden`.
+async fn admit(storage: &Storage, m: &MazeText, hidden: bool) -> Result<i64> {
+    let text = m.layout.clone().into_bytes();
+    let maze = super::bundles::blocking(move || mazefile::parse(&text))
+        .await?
+        .map_err(|e| RegistryError::Invalid(format!("invalid maze: {e}")))?;
+    if let Some(stored) = storage.get_maze_by_hash(&maze.hash()).await? {
+        return match (stored.hidden, hidden) {
+            (true, true) | (false, false) => Ok(stored.maze_id),
+            (false, true) => Err(RegistryError::Invalid(
+                "its layout is public on this server already: a ranking maze must be hidden".into(),
+            )),
+            (true, false) => Err(RegistryError::Invalid(
+                "its layout is a hidden maze on this server: a practice maze must be public".into(),
+            )),
+        };
+    }
+    Ok(
+        super::mazes::admit(storage, &m.name, m.layout.as_bytes(), hidden)
+            .await?
+            .maze_id,
+    )
+}
+
+/// What an organiser may change after creating a competition (fields left out stay).
+#[derive(Debug, Clone, Default, serde::Deserialize, utoipa::ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Patch {
+    /// Title.
+    pub title: Option<String>,
+    /// Description.
+    pub description: Option<String>,
+    /// Rules.
+    pub rules: Option<String>,
+    /// Opening (before it opens only).
+    pub opens_at: Option<Timestamp>,
+    /// Close (before it closes only; the close moved to now closes it now).
+    pub closes_at: Option<Timestamp>,
+    /// Freeze before the close, hours (a negative number: no freeze).
+    pub freeze_hours: Option<f64>,
+    /// Versions per entrant per 24 hours.
+    pub versions_per_day: Option<u32>,
+    /// Practice matches per entrant per 24 hours.
+    pub practice_per_day: Option<u32>,
+    /// The final selection rule.
+    pub selection: Option<Rule>,
+    /// With `choice`: how many versions an entrant may choose.
+    pub max_selected: Option<u32>,
+    /// The final run's repeats.
+    pub final_repeats: Option<u32>,
+    /// Whether the private mazes are shown with the results.
+    pub reveal_private_mazes: Option<bool>,
+    /// The match limits (all three, replacing the old).
+    pub limits: Option<Limits>,
+}
+
+/// Applies `patch` to competition `c` at `now`. Once closed, nothing but the texts
+/// changes; the opening cannot move once open.
+///
+/// # Errors
+/// [`RegistryError::Conflict`] for a change too late, [`RegistryError::Invalid`] for a
+/// value out of range, the database.
+pub async fn edit(
+    storage: &Storage,
+    mut c: CompetitionRow,
+    patch: Patch,
+    now: i64,
+) -> Result<CompetitionRow> {
+    if c.kind == "default" {
+        return Err(RegistryError::Conflict(
+            "the default competition (the server's ranking) has no settings to edit".into(),
+        ));
+    }
+    let phase = phase(&c, now);
+    let rules_change = patch.opens_at.is_some()
+        || patch.closes_at.is_some()
+        || patch.freeze_hours.is_some()
+        || patch.versions_per_day.is_some()
+        || patch.practice_per_day.is_some()
+        || patch.selection.is_some()
+        || patch.max_selected.is_some()
+        || patch.final_repeats.is_some()
+        || patch.reveal_private_mazes.is_some()
+        || patch.limits.is_some();
+    if phase == Phase::Closed && rules_change {
+        return Err(RegistryError::Conflict(format!(
+            "competition {} closed at {} UTC: only its title, description and rules can change",
+            c.name,
+            Timestamp(c.closes_at.unwrap_or(0)).words()
+        )));
+    }
+    if let Some(t) = patch.opens_at
+        && phase != Phase::Upcoming
+        && Some(t.0) != c.opens_at
+    {
+        return Err(RegistryError::Conflict(format!(
+            "competition {} is open already: its opening cannot move",
+            c.name
+        )));
+    }
+    let invalid = |e: spec::SpecError| RegistryError::Invalid(e.0);
+    if let Some(title) = patch.title {
+        if title.trim().is_empty() || title.chars().count() > spec::MAX_TITLE_CHARS {
+            return Err(RegistryError::Invalid(format!(
+                "a title is 1 to {} characters",
+                spec::MAX_TITLE_CHARS
+            )));
+        }
+        c.title = title;
+    }
+    for (text, slot) in [
+        (patch.description, &mut c.description),
+        (patch.rules, &mut c.rules),
+    ] {
+        if let Some(text) = text {
+            if text.chars().count() > spec::MAX_TEXT_CHARS {
+                return Err(RegistryError::Invalid(format!(
+                    "a text is at most {} characters",
+                    spec::MAX_TEXT_CHARS
+                )));
+            }
+            *slot = text;
+        }
+    }
+    let opens = patch.opens_at.map_or(c.opens_at.unwrap_or(0), |t| t.0);
+    // A close moved into the past closes the competition now.
+    let closes = patch
+        .closes_at
+        .map_or(c.closes_at.unwrap_or(0), |t| t.0.max(now));
+    let freeze_hours = match patch.freeze_hours {
+        Some(h) if h < 0.0 => None,
+        Some(h) => Some(h),
+        None => c.freeze_ms.map(|ms| ms as f64 / 3_600_000.0),
+    };
+    check_schedule(Timestamp(opens), Timestamp(closes), freeze_hours).map_err(invalid)?;
+    c.opens_at = Some(opens);
+    c.closes_at = Some(closes);
+    c.freeze_ms = freeze_hours.map(|h| (h * 3_600_000.0).round() as i64);
+    let counts = [
+        (
+            "versions_per_day",
+            patch.versions_per_day,
+            0,
+            1000,
+            &mut c.versions_per_day,
+        ),
+        (
+            "practice_per_day",
+            patch.practice_per_day,
+            0,
+            10_000,
+            &mut c.practice_per_day,
+        ),
+        (
+            "max_selected",
+            patch.max_selected,
+            1,
+            10,
+            &mut c.max_selected,
+        ),
+        (
+            "final_repeats",
+            patch.final_repeats,
+            0,
+            50,
+            &mut c.final_repeats,
+        ),
+    ];
+    for (field, value, low, high, slot) in counts {
+        if let Some(v) = value {
+            if !(low..=high).contains(&v) {
+                return Err(RegistryError::Invalid(format!(
+                    "{field} is {low} to {high}, not {v}"
+                )));
+            }
+            *slot = i64::from(v);
+        }
+    }
+    if let Some(rule) = patch.selection {
+        c.selection = rule.as_str().to_string();
+    }
+    if let Some(reveal) = patch.reveal_private_mazes {
+        c.reveal_private_mazes = reveal;
+    }
+    if let Some(limits) = patch.limits {
+        limits.check().map_err(invalid)?;
+        c.limits = serde_json::to_string(&limits).unwrap_or_else(|_| "{}".into());
+    }
+    storage.save_competition_settings(&c).await?;
+    Ok(c)
+}
+
+/// An entrant's quota of versions in competition `c` at `now`.
+///
+/// # Errors
+/// The database.
+pub async fn version_quota(
+    storage: &Storage,
+    c: &CompetitionRow,
+    entrant_id: i64,
+    now: i64,
+) -> Result<Quota> {
+    let times = storage
+        .counted_version_times(c, entrant_id, now - DAY_MS)
+        .await?;
+    Ok(Quota::at(
+        &times,
+        c.versions_per_day as u32,
+        now,
+        "versions",
+    ))
+}
+
+/// An entrant's quota of practice matches in competition `c` at `now`.
+///
+/// # Errors
+/// The database.
+pub async fn practice_quota(
+    storage: &Storage,
+    c: &CompetitionRow,
+    entrant_id: i64,
+    now: i64,
+) -> Result<Quota> {
+    let times = storage
+        .practice_times(c.competition_id, entrant_id, now - DAY_MS)
+        .await?;
+    Ok(Quota::at(
+        &times,
+        c.practice_per_day as u32,
+        now,
+        "practice matches",
+    ))
+}
+
+/// Why bot `bot_id` may not get a new version at `now`: a competition it is entered in
+/// has closed, or its entrant's quota there is used up.
+#[derive(Debug, Clone, PartialEq)]
+pub enum UploadRefusal {
+    /// The competition closed at this time.
+    Closed(String),
+    /// The quota is used up (what it says, and when the next one comes).
+    Quota(String, Quota),
+}
+
+/// Whether bot `bot_id` may get a new version at `now` (see [`UploadRefusal`]).
+///
+/// # Errors
+/// The database.
+pub async fn check_upload(
+    storage: &Storage,
+    bot_id: i64,
+    now: i64,
+) -> Result<Option<UploadRefusal>> {
+    for c in storage.competitions_of_bot(bot_id).await? {
+        if phase(&c, now) == Phase::Closed {
+            return Ok(Some(UploadRefusal::Closed(format!(
+                "competition {} closed at {} UTC: no new versions",
+                c.name,
+                Timestamp(c.closes_at.unwrap_or(0)).rfc3339()
+            ))));
+        }
+        let entrant = storage
+            .competition_entries(c.competition_id)
+            .await?
+            .into_iter()
+            .find(|e| e.bot_id == bot_id);
+        if let Some(e) = entrant {
+            let quota = version_quota(storage, &c, e.entrant_id, now).await?;
+            if !quota.allows_one_more() {
+                return Ok(Some(UploadRefusal::Quota(
+                    format!("competition {}: {}", c.name, quota.message),
+                    quota,
+                )));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// Whether bot `bot_id` may play one more practice match on maze `maze_id` at `now`:
+/// the refusal (what it says, the quota) when the maze is a practice maze of a
+/// competition the bot is entered in and its entrant's practice quota there is used up.
+///
+/// # Errors
+/// The database.
+pub async fn check_practice(
+    storage: &Storage,
+    bot_id: i64,
+    maze_id: i64,
+    now: i64,
+) -> Result<Option<(String, Quota)>> {
+    for c in storage.competitions_of_bot(bot_id).await? {
+        let practice = storage
+            .competition_mazes(c.competition_id)
+            .await?
+            .iter()
+            .any(|m| m.maze_id == maze_id && m.maze_set == "practice");
+        let entry = storage
+            .competition_entries(c.competition_id)
+            .await?
+            .into_iter()
+            .find(|e| e.bot_id == bot_id);
+        if let (true, Some(e)) = (practice, entry) {
+            let quota = practice_quota(storage, &c, e.entrant_id, now).await?;
+            if !quota.allows_one_more() {
+                return Ok(Some((
+                    format!("competition {}: {}", c.name, quota.message),
+                    quota,
+                )));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// Which board.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, Serialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum BoardKind {
+    /// The public ranking set.
+    Public,
+    /// The private ranking set.
+    Private,
+}
+
+/// One entrant's line on a board.
+#[derive(Debug, Clone, PartialEq, Serialize, utoipa::ToSchema)]
+pub struct BoardLine {
+    /// 1 for the best mean score; equal numbers share a rank.
+    pub rank: i64,
+    /// The entrant's name.
+    pub entrant: String,
+    /// The bot.
+    pub bot_id: i64,
+    /// The bot's name.
+    pub bot_name: String,
+    /// The version counted: the entrant's latest that has played all its matches there
+    /// (while frozen, the latest uploaded before the freeze).
+    pub version: i64,
+    /// Matches counted.
+    pub played: i64,
+    /// Of which finished.
+    pub finished: i64,
+    /// Mean score, a did-not-finish counting as 1000.
+    pub mean_score: f64,
+    /// finished / played.
+    pub finish_rate: f64,
+}
+
+/// A board as some caller may see it.
+#[derive(Debug, Clone, PartialEq, Serialize, utoipa::ToSchema)]
+pub struct Board {
+    /// Which board.
+    pub board: BoardKind,
+    /// True when the caller may not see it yet (the private board before the close):
+    /// `standings` is then empty.
+    pub sealed: bool,
+    /// Since when the public board shows only versions uploaded before the freeze.
+    pub frozen_at: Option<Timestamp>,
+    /// Best first.
+    pub standings: Vec<BoardLine>,
+}
+
+/// Board `kind` of competition `c` at `now`, as an organiser (`organiser`: everything,
+/// versions still playing included) or anyone else sees it: the private board sealed
+/// until the close; on either board only versions whose matches there have all been
+/// played (a mean that moves with each match would show each match's result); while the
+/// public board is frozen, only versions uploaded before the freeze.
+///
+/// # Errors
+/// The database.
+pub async fn board(
+    storage: &Storage,
+    c: &CompetitionRow,
+    kind: BoardKind,
+    organiser: bool,
+    now: i64,
+) -> Result<Board> {
+    let phase = phase(c, now);
+    let tournament = match kind {
+        BoardKind::Public => c.public_tournament_id,
+        BoardKind::Private => c.private_tournament_id,
+    };
+    let frozen_at = timeline(c)
+        .and_then(|t| t.frozen_from())
+        .filter(|&f| kind == BoardKind::Public && now >= f);
+    let sealed = kind == BoardKind::Private && phase != Phase::Closed && !organiser;
+    let rows = match tournament {
+        Some(t) if !sealed => storage.competition_board(t, false).await?,
+        _ => Vec::new(),
+    };
+    let kept = rows.into_iter().filter(|r| {
+        organiser
+            || (!r.pending && frozen_at.is_none_or(|f| r.created_at < f || phase == Phase::Closed))
+    });
+    Ok(Board {
+        board: kind,
+        sealed,
+        frozen_at: frozen_at.map(Timestamp),
+        standings: latest_per_bot(kept),
+    })
+}
+
+/// Each bot's latest version among `rows`, ranked.
+fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
+    let mut latest: Vec<BoardRow> = Vec::new();
+    for r in rows {
+        match latest.iter_mut().find(|l| l.bot_id == r.bot_id) {
+            Some(l) if l.version < r.version => *l = r,
+            Some(_) => {}
+            None => latest.push(r),
+        }
+    }
+    latest.sort_by(|a, b| {
+        a.mean_score
+            .total_cmp(&b.mean_score)
+            .then(b.finish_rate.total_cmp(&a.finish_rate))
+            .then(a.bot_name.cmp(&b.bot_name))
+    });
+    let mut lines: Vec<BoardLine> = Vec::with_capacity(latest.len());
+    for (i, r) in latest.into_iter().enumerate() {
+        let rank = match lines.last() {
+            Some(p) if p.mean_score == r.mean_score && p.finish_rate == r.finish_rate => p.rank,
+            _ => i as i64 + 1,
+        };
+        lines.push(BoardLine {
+            rank,
+            entrant: r.entrant_name.unwrap_or_default(),
+            bot_id: r.bot_id,
+            bot_name: r.bot_name,
+            version: r.version,
+            played: r.played,
+            finished: r.finished,
+            mean_score: r.mean_score,
+            finish_rate: r.finish_rate,
+        });
+    }
+    lines
+}
+
+/// What the server's clock did in one [`tick`].
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TickReport {
+    /// Versions queued on ranking sets.
+    pub ranked: usize,
+    /// Competitions whose final selection was made.
+    pub selected: usize,
+    /// Competitions whose results were written.
+    pub finalized: usize,
+}
+
+/// The clock's work at `now`: queues every new ready version of an entered bot on its
+/// competitions' ranking sets; for each closed competition, unseals its private board,
+/// and once its last matches and builds are done makes the final selection (and queues
+/// the final run), and once that is played writes the results. Safe to run on several
+/// servers at once: each step is done once.
+///
+/// # Errors
+/// The database.
+pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
+    let mut report = TickReport::default();
+    let to_rank = storage.versions_to_rank(now).await?;
+    let mut cache: Vec<(CompetitionRow, Vec<CompetitionMaze>)> = Vec::new();
+    for (competition_id, version_id) in to_rank {
+        if !cache
+            .iter()
+            .any(|(c, _)| c.competition_id == competition_id)
+        {
+            let Some(c) = storage
+                .list_competitions()
+                .await?
+                .into_iter()
+                .find(|c| c.competition_id == competition_id)
+            else {
+                continue;
+            };
+            let mazes = storage.competition_mazes(competition_id).await?;
+            cache.push((c, mazes));
+        }
+        let Some((c, mazes)) = cache
+            .iter()
+            .find(|(c, _)| c.competition_id == competition_id)
+        else {
+            continue;
+        };
+        let set = |name: &str| -> Vec<i64> {
+            mazes
+                .iter()
+                .filter(|m| m.maze_set == name)
+                .map(|m| m.maze_id)
+                .collect()
+        };
+        if storage
+            .rank_version(c, version_id, &set("public"), &set("private"))
+            .await?
+        {
+            report.ranked += 1;
+        }
+    }
+    for c in storage.list_competitions().await? {
+        if c.kind != "competition"
+            || phase(&c, now) != Phase::Closed
+            || c.state.as_deref() == Some("final")
+        {
+            continue;
+        }
+        storage.unseal_private_set(&c).await?;
+        if storage.competition_work_left(&c).await? > 0 {
+            continue;
+        }
+        match c.state.as_deref() {
+            None => {
+                let selected = final_selection(storage, &c).await?;
+                let private: Vec<i64> = storage
+                    .competition_mazes(c.competition_id)
+                    .await?
+                    .into_iter()
+                    .filter(|m| m.maze_set == "private")
+                    .map(|m| m.maze_id)
+                    .collect();
+                if storage.start_final(&c, &selected, &private).await? {
+                    report.selected += 1;
+                }
+            }
+            Some("final_run") if finalize(storage, &c).await? => report.finalized += 1,
+            _ => {}
+        }
+    }
+    Ok(report)
+}
+
+/// The versions each entrant has counting at the end, by the competition's rule.
+async fn final_selection(storage: &Storage, c: &CompetitionRow) -> Result<Vec<i64>> {
+    let rule = Rule::parse(&c.selection).unwrap_or_default();
+    let public: Vec<BoardRow> = match c.public_tournament_id {
+        Some(t) => storage.competition_board(t, false).await?,
+        None => Vec::new(),
+    };
+    let mut selected = Vec::new();
+    for e in storage.competition_entries(c.competition_id).await? {
+        let candidates: Vec<Candidate> = storage
+            .submissions(c, e.entrant_id)
+            .await?
+            .into_iter()
+            .filter(|s| s.ranked && s.build_status == "ready")
+            .map(|s| Candidate {
+                bot_version_id: s.bot_version_id,
+                version: s.version,
+                public_mean: public
+                    .iter()
+                    .find(|r| r.bot_version_id == s.bot_version_id)
+                    .map(|r| r.mean_score),
+                chosen: s.chosen,
+            })
+            .collect();
+        selected.extend(selection::select(
+            rule,
+            c.max_selected as usize,
+            &candidates,
+        ));
+    }
+    Ok(selected)
+}
+
+/// The tournament whose matches decide the results: the final run's if there is one,
+/// else the private set's.
+pub fn deciding_tournament(c: &CompetitionRow) -> Option<i64> {
+    c.final_tournament_id.or(c.private_tournament_id)
+}
+
+/// Writes the results of a competition whose final run is played: each entrant's best
+/// selected version on the deciding set, with its manifest and the recount check.
+async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
+    let Some(t) = deciding_tournament(c) else {
+        return Ok(false);
+    };
+    let kept = storage.competition_board(t, false).await?;
+    let counted = storage.competition_board(t, true).await?;
+    let mut chosen = std::collections::HashSet::new();
+    for e in storage.competition_entries(c.competition_id).await? {
+        for s in storage.submissions(c, e.entrant_id).await? {
+            if s.selected {
+                chosen.insert(s.bot_version_id);
+            }
+        }
+    }
+    let scores: Vec<VersionScore> = kept
+        .iter()
+        .filter(|r| chosen.contains(&r.bot_version_id))
+        .filter_map(|r| {
+            Some(VersionScore {
+                entrant_id: r.entrant_id?,
+                bot_version_id: r.bot_version_id,
+                played: r.played,
+                finished: r.finished,
+                mean_score: r.mean_score,
+                finish_rate: r.finish_rate,
+            })
+        })
+        .collect();
+    let mazes: Vec<serde_json::Value> = storage
+        .competition_mazes(c.competition_id)
+        .await?
+        .into_iter()
+        .filter(|m| m.maze_set == "private")
+        .map(|m| serde_json::json!({"name": m.name, "hash": m.hash}))
+        .collect();
+    let seeds: Vec<serde_json::Value> = storage
+        .tournament_seeds(t)
+        .await?
+        .into_iter()
+        .map(|(repeat, seed)| serde_json::json!({"repeat": repeat, "seed": seed}))
+        .collect();
+    let mut rows = Vec::new();
+    for (rank, s) in selection::rank_entrants(&scores) {
+        let Some(row) = kept.iter().find(|r| r.bot_version_id == s.bot_version_id) else {
+            continue;
+        };
+        let recount = counted
+            .iter()
+            .find(|r| r.bot_version_id == s.bot_version_id);
+        let equal = recount.is_some_and(|r| {
+            r.played == row.played
+                && r.finished == row.finished
+                && (r.mean_score - row.mean_score).abs() < 1e-9
+        });
+        if !equal {
+            tracing::error!(competition = %c.name, version = s.bot_version_id,
+                "the running sums differ from the recount of the match records");
+        }
+        let version = storage.get_bot_version(s.bot_version_id).await?;
+        let manifest = serde_json::json!({
+            "competition": c.name,
+            "bot_version_id": s.bot_version_id,
+            "bundle_sha256": version.as_ref().map(|v| v.files_sha256.clone()),
+            "built_sha256": version.as_ref().and_then(|v| v.built_sha256.clone()),
+            "command": version.as_ref().map(|v| v.command.clone()),
+            "referee": crate::runner::ENGINE_VERSION,
+            "tournament_id": t,
+            "mazes": mazes,
+            "seeds": seeds,
+            "limits": c.limit_set(),
+            "recount": {
+                "equal": equal,
+                "played": recount.map(|r| r.played),
+                "finished": recount.map(|r| r.finished),
+                "mean_score": recount.map(|r| r.mean_score),
+            },
+            "replay": "for each maze and seed: mazearena run --maze MAZE_FILE --bot COMMAND --bot-dir BUNDLE_DIR --seed SEED (with the limits above)",
+        });
+        rows.push(ResultRow {
+            rank,
+            entrant_id: s.entrant_id,
+            entrant_name: row.entrant_name.clone().unwrap_or_default(),
+            bot_id: row.bot_id,
+            bot_name: row.bot_name.clone(),
+            bot_version_id: s.bot_version_id,
+            version: row.version,
+            played: row.played,
+            finished: row.finished,
+            mean_score: row.mean_score,
+            finish_rate: row.finish_rate,
+            manifest: manifest.to_string(),
+        });
+    }
+    let mut reveal = Vec::new();
+    if c.reveal_private_mazes {
+        for m in storage.competition_mazes(c.competition_id).await? {
+            if m.maze_set == "private"
+                && !storage
+                    .maze_in_other_live_competition(m.maze_id, c.competition_id)
+                    .await?
+            {
+                reveal.push(m.maze_id);
+            }
+        }
+    }
+    Ok(storage.write_results(c, &rows, &reveal).await?)
+}
+
+/// Checks stored results against a recount from the match records now: the rows whose
+/// numbers differ (empty: the snapshot holds).
+///
+/// # Errors
+/// The database.
+pub async fn recount_differences(storage: &Storage, c: &CompetitionRow) -> Result<Vec<String>> {
+    let Some(t) = deciding_tournament(c) else {
+        return Ok(Vec::new());
+    };
+    let counted = storage.competition_board(t, true).await?;
+    let mut differ = Vec::new();
+    for r in storage.competition_results(c.competition_id).await? {
+        let same = counted
+            .iter()
+            .find(|x| x.bot_version_id == r.bot_version_id)
+            .is_some_and(|x| {
+                x.played == r.played
+                    && x.finished == r.finished
+                    && (x.mean_score - r.mean_score).abs() < 1e-9
+            });
+        if !same {
+            differ.push(format!("{} (version {})", r.entrant_name, r.version));
+        }
+    }
+    Ok(differ)
+}
+
+/// The results as CSV: a header, then one row per entrant.
+pub fn results_csv(rows: &[ResultRow]) -> String {
+    let field = |s: &str| {
+        if s.contains([',', '"', '\n', '\r']) {
+            format!("\"{}\"", s.replace('"', "\"\""))
+        } else {
+            s.to_string()
+        }
+    };
+    let mut out = String::from(
+        "rank,entrant,bot,version,played,finished,mean_score,finish_rate,bundle_sha256\n",
+    );
+    for r in rows {
+        let bundle = serde_json::from_str::<serde_json::Value>(&r.manifest)
+            .ok()
+            .and_then(|m| m["bundle_sha256"].as_str().map(str::to_string))
+            .unwrap_or_default();
+        out.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{}\n",
+            r.rank,
+            field(&r.entrant_name),
+            field(&r.bot_name),
+            r.version,
+            r.played,
+            r.finished,
+            r.mean_score,
+            r.finish_rate,
+            bundle
+        ));
+    }
+    out
+}

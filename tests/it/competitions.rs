@@ -1,0 +1,471 @@
+//! A whole competition on a real server, on SQLite and on PostgreSQL: entrants register,
+//! upload and are ranked automatically, hit their quotas, cannot see the private set
+//! before the close (on any route or page), see it after; the final snapshot equals a
+//! recount; the CSV has one row per entrant.
+
+use std::time::{Duration, Instant};
+
+use mazearena::engine::generator::generate;
+use mazearena::engine::mazefile::numeric;
+use reqwest::Method;
+use serde_json::{Value, json};
+
+use crate::faults::{new_database, postgres};
+use crate::support::{ADMIN, TestServer, simple_bot_files};
+
+/// RFC 3339 of unix ms.
+fn at(ms: i64) -> String {
+    mazearena::competition::Timestamp(ms).rfc3339()
+}
+
+fn now_ms() -> i64 {
+    mazearena::storage::now_ms()
+}
+
+/// A generated maze as the API takes it.
+fn maze(name: &str, seed: u64) -> Value {
+    json!({"name": name, "layout": numeric::write(&generate(12, seed).unwrap())})
+}
+
+/// Waits (at most 180 s) for `check` to hold of GET `path`'s JSON (as `token`).
+async fn wait_for(
+    server: &TestServer,
+    path: &str,
+    token: Option<&str>,
+    check: impl Fn(&Value) -> bool,
+) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(180);
+    loop {
+        let (_, v) = server.get(path, token).await;
+        if check(&v) {
+            return v;
+        }
+        assert!(Instant::now() < deadline, "{path} never got there: {v}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+}
+
+#[tokio::test]
+async fn a_whole_competition_on_sqlite() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    play_a_competition(&server).await;
+}
+
+#[tokio::test]
+async fn a_whole_competition_on_postgres() {
+    let Some((url, _)) = postgres("a_whole_competition_on_postgres") else {
+        return;
+    };
+    let database = new_database(&url, "competition").await;
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start_on(dir.path(), Some(&database), &[], &[]);
+    play_a_competition(&server).await;
+}
+
+async fn play_a_competition(server: &TestServer) {
+    let call = |method: Method, path: String, body: Option<Value>, token: Option<String>| async move {
+        let (s, v, _) = server.call(method, &path, body, token.as_deref()).await;
+        (s, v)
+    };
+    // The admin makes an organiser; the organiser creates the competition.
+    let (s, o) = server
+        .post("/api/organisers", json!({"name": "teacher"}), Some(ADMIN))
+        .await;
+    assert_eq!(s, 201, "{o}");
+    let organiser = o["key"].as_str().unwrap().to_string();
+    let start = now_ms();
+    let spec = json!({
+        "name": "class-2027", "title": "Class of 2027",
+        "description": "Find the centre, fast.", "rules": "One bot per team.",
+        "opens_at": at(start - 60_000), "closes_at": at(start + 3_600_000),
+        "repeats": 2, "final_repeats": 1, "versions_per_day": 2, "practice_per_day": 1,
+        "selection": "best_public",
+        "limits": {"move_timeout_ms": 2000},
+        "mazes": {
+            "practice": [maze("warm-up", 9001)],
+            "public": [maze("pub-a", 9002), maze("pub-b", 9003)],
+            "private": [maze("priv-a", 9004), maze("priv-b", 9005)],
+        },
+    });
+    let (s, v) = server.post("/api/competitions", spec.clone(), None).await;
+    assert_eq!(s, 401, "{v}");
+    let (s, c) = server
+        .post("/api/competitions", spec.clone(), Some(&organiser))
+        .await;
+    assert_eq!(s, 201, "{c}");
+    assert_eq!(c["phase"], "open");
+    let (s, v) = server
+        .post("/api/competitions", spec, Some(&organiser))
+        .await;
+    assert_eq!(s, 409, "{v}");
+    // Anyone sees the practice maze's id, not the ranking mazes' ids or hashes, nor seeds.
+    let (_, public_view) = server.get("/api/competitions/class-2027", None).await;
+    let mazes = public_view["mazes"].as_array().unwrap();
+    let practice = mazes.iter().find(|m| m["set"] == "practice").unwrap()["maze_id"]
+        .as_i64()
+        .unwrap();
+    assert!(
+        mazes
+            .iter()
+            .filter(|m| m["set"] != "practice")
+            .all(|m| m["maze_id"].is_null() && m["hash"].is_null())
+    );
+    assert!(public_view["seeds"].is_null());
+    let (_, org_view) = server
+        .get("/api/competitions/class-2027", Some(&organiser))
+        .await;
+    assert_eq!(org_view["seeds"].as_array().unwrap().len(), 70);
+
+    // Three entrants register, each with a bot, and enter it.
+    let mut teams: Vec<(String, i64)> = Vec::new();
+    for name in ["ada", "brian", "claude"] {
+        let (s, e) = server
+            .post(
+                "/api/entrants",
+                json!({"name": name, "members": [name]}),
+                None,
+            )
+            .await;
+        assert_eq!(s, 201, "{e}");
+        let key = e["key"].as_str().unwrap().to_string();
+        let body = json!({"name": format!("{name}-bot"), "command": "python3 simple_bot.py", "files": simple_bot_files()});
+        let (s, b) = server.post("/api/bots", body, Some(&key)).await;
+        assert_eq!(s, 201, "{b}");
+        let bot = b["bot_id"].as_i64().unwrap();
+        let (s, v) = server
+            .post(
+                "/api/competitions/class-2027/entries",
+                json!({"bot_id": bot}),
+                None,
+            )
+            .await;
+        assert_eq!(s, 401, "{v}");
+        let (s, v) = server
+            .post(
+                "/api/competitions/class-2027/entries",
+                json!({"bot_id": bot}),
+                Some(&key),
+            )
+            .await;
+        assert_eq!(s, 201, "{v}");
+        teams.push((key, bot));
+    }
+    // Another entrant's bot cannot be entered by a key that is not its entrant's.
+    let (s, v) = server
+        .post(
+            "/api/competitions/class-2027/entries",
+            json!({"bot_id": teams[1].1}),
+            Some(&teams[0].0),
+        )
+        .await;
+    assert!(s == 403 || s == 409, "{s} {v}");
+
+    // Ranked automatically: the public board fills in with nothing done by hand.
+    let board = wait_for(
+        server,
+        "/api/competitions/class-2027/leaderboard",
+        None,
+        |v| v["standings"].as_array().is_some_and(|r| r.len() == 3),
+    )
+    .await;
+    assert!(
+        board["standings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|r| r["played"] == 4),
+        "{board}"
+    );
+
+    // Sealed before the close: the private board, tournament and matches, for an entrant
+    // and for an anonymous client; the organiser sees them.
+    let private_t = org_view["public_tournament_id"].as_i64().unwrap() + 1;
+    for token in [None, Some(teams[0].0.clone())] {
+        let (s, v) = call(
+            Method::GET,
+            "/api/competitions/class-2027/leaderboard?board=private".into(),
+            None,
+            token.clone(),
+        )
+        .await;
+        assert_eq!(s, 200, "{v}");
+        assert_eq!(
+            (
+                v["sealed"].as_bool(),
+                v["standings"].as_array().map(Vec::len)
+            ),
+            (Some(true), Some(0)),
+            "{v}"
+        );
+        let (s, _) = call(
+            Method::GET,
+            format!("/api/tournaments/{private_t}"),
+            None,
+            token.clone(),
+        )
+        .await;
+        assert_eq!(s, 404);
+        let (s, _) = call(
+            Method::GET,
+            format!("/api/leaderboard?tournament={private_t}"),
+            None,
+            token.clone(),
+        )
+        .await;
+        assert_eq!(s, 404);
+        let (_, list) = call(Method::GET, "/api/tournaments".into(), None, token.clone()).await;
+        assert!(
+            list["items"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|t| t["tournament_id"] != private_t),
+            "{list}"
+        );
+        let (_, list) = call(
+            Method::GET,
+            format!("/api/matches?tournament_id={private_t}"),
+            None,
+            token.clone(),
+        )
+        .await;
+        assert_eq!(list["items"].as_array().unwrap().len(), 0, "{list}");
+        let (_, list) = call(
+            Method::GET,
+            "/api/matches?limit=200".into(),
+            None,
+            token.clone(),
+        )
+        .await;
+        assert!(
+            list["items"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|m| m["tournament_id"] != private_t)
+        );
+    }
+    let (_, org_matches) = server
+        .get(
+            &format!("/api/matches?tournament_id={private_t}&limit=200"),
+            Some(&organiser),
+        )
+        .await;
+    let private_match = org_matches["items"][0]["match_id"].as_i64().unwrap();
+    for token in [None, Some(teams[0].0.as_str())] {
+        let (s, _) = server
+            .get(&format!("/api/matches/{private_match}"), token)
+            .await;
+        assert_eq!(s, 404);
+        let (s, _) = server
+            .get(&format!("/api/matches/{private_match}/replay"), token)
+            .await;
+        assert_eq!(s, 404);
+    }
+    for page in [
+        format!("/matches/{private_match}"),
+        format!("/tournaments/{private_t}"),
+    ] {
+        assert_eq!(server.get_text(&page).await.0, 404, "{page}");
+    }
+    let (_, pages) = server.get_text("/tournaments").await;
+    assert!(
+        !pages.contains("private ranking"),
+        "the tournaments page lists the private set"
+    );
+    let (_, private_board) = server
+        .get(
+            "/api/competitions/class-2027/leaderboard?board=private",
+            Some(&organiser),
+        )
+        .await;
+    assert!(
+        !private_board["sealed"].as_bool().unwrap(),
+        "{private_board}"
+    );
+
+    // Quotas: 2 versions a day (the first counts); the third is refused and says when.
+    let (ada, ada_bot) = (teams[0].0.clone(), teams[0].1);
+    let upload = json!({"command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (s, v) = server
+        .post(
+            &format!("/api/bots/{ada_bot}/versions"),
+            upload.clone(),
+            Some(&ada),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    let (s, v) = server
+        .post(
+            &format!("/api/bots/{ada_bot}/versions"),
+            upload.clone(),
+            Some(&ada),
+        )
+        .await;
+    assert_eq!(s, 429, "{v}");
+    let message = v["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("2 of 2 versions used in the last 24 hours; the next one at"),
+        "{message}"
+    );
+    let (s, mine) = server
+        .get("/api/competitions/class-2027/submissions", Some(&ada))
+        .await;
+    assert_eq!(s, 200, "{mine}");
+    assert_eq!(mine["versions"].as_array().unwrap().len(), 2, "{mine}");
+    assert!(
+        mine["versions_quota"]["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("2 of 2 versions"),
+        "{mine}"
+    );
+    let (s, _) = server
+        .get("/api/competitions/class-2027/submissions", None)
+        .await;
+    assert_eq!(s, 401);
+    // Practice: 1 a day on the practice maze.
+    let practice_match = json!({"bot_id": ada_bot, "maze_id": practice, "seed": 1});
+    let (s, v) = server
+        .post("/api/matches", practice_match.clone(), Some(&ada))
+        .await;
+    assert_eq!(s, 202, "{v}");
+    let (s, v) = server
+        .post("/api/matches", practice_match, Some(&ada))
+        .await;
+    assert_eq!(s, 429, "{v}");
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("1 of 1 practice matches"),
+        "{v}"
+    );
+    // Ada's second version gets ranked too.
+    wait_for(
+        server,
+        "/api/competitions/class-2027/submissions",
+        Some(&ada),
+        |v| v["versions"][0]["status"] == "ranked",
+    )
+    .await;
+    // No results before the close.
+    let (s, _) = server
+        .get("/api/competitions/class-2027/results", None)
+        .await;
+    assert_eq!(s, 409);
+
+    // The organiser closes it now: no new versions (409 with the time).
+    let (s, v) = call(
+        Method::PATCH,
+        "/api/competitions/class-2027".into(),
+        Some(json!({"closes_at": at(now_ms())})),
+        Some(organiser.clone()),
+    )
+    .await;
+    assert_eq!((s, v["phase"].as_str()), (200, Some("closed")), "{v}");
+    let (s, v) = server
+        .post(
+            &format!("/api/bots/{}/versions", teams[1].1),
+            upload,
+            Some(&teams[1].0),
+        )
+        .await;
+    assert_eq!(s, 409, "{v}");
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("closed at"),
+        "{v}"
+    );
+    let (s, v) = call(
+        Method::PATCH,
+        "/api/competitions/class-2027".into(),
+        Some(json!({"versions_per_day": 9})),
+        Some(organiser.clone()),
+    )
+    .await;
+    assert_eq!(s, 409, "{v}");
+
+    // The final selection and run, then the results: public, one row per entrant.
+    let c = wait_for(server, "/api/competitions/class-2027", None, |v| {
+        v["state"] == "final"
+    })
+    .await;
+    assert_eq!(
+        c["seeds"].as_array().unwrap().len(),
+        70,
+        "the seeds are public with the results"
+    );
+    let (_, private_board) = server
+        .get(
+            "/api/competitions/class-2027/leaderboard?board=private",
+            None,
+        )
+        .await;
+    assert_eq!(
+        private_board["standings"].as_array().unwrap().len(),
+        3,
+        "{private_board}"
+    );
+    let (s, results) = server
+        .get("/api/competitions/class-2027/results", None)
+        .await;
+    assert_eq!(s, 200, "{results}");
+    assert_eq!(results["recount_equal"], true, "{results}");
+    let rows = results["results"].as_array().unwrap();
+    assert_eq!(rows.len(), 3, "{results}");
+    for row in rows {
+        // The final run: each selected version once on each of the 2 private mazes.
+        assert_eq!(row["played"], 2, "{row}");
+        let manifest: Value = serde_json::from_str(row["manifest"].as_str().unwrap()).unwrap();
+        assert_eq!(manifest["recount"]["equal"], true, "{manifest}");
+        assert_eq!(manifest["mazes"].as_array().unwrap().len(), 2);
+        assert_eq!(manifest["seeds"].as_array().unwrap().len(), 1);
+        assert_eq!(manifest["limits"]["move_timeout_ms"], 2000);
+        assert_eq!(
+            manifest["bundle_sha256"].as_str().map(str::len),
+            Some(64),
+            "{manifest}"
+        );
+    }
+    let csv = server
+        .client()
+        .get(format!(
+            "{}/api/competitions/class-2027/results.csv",
+            server.base
+        ))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 4, "{csv}");
+    assert!(lines[0].starts_with("rank,entrant,bot,version"), "{csv}");
+    for name in ["ada", "brian", "claude"] {
+        assert_eq!(
+            lines
+                .iter()
+                .filter(|l| l.contains(&format!(",{name},")))
+                .count(),
+            1,
+            "{csv}"
+        );
+    }
+    // The final run's tournament is open to all now; the matches played under the
+    // competition's limits.
+    let (_, list) = server
+        .get(
+            &format!("/api/matches?tournament_id={private_t}&limit=1"),
+            None,
+        )
+        .await;
+    assert_eq!(
+        list["items"][0]["limits"]["move_timeout_ms"], 2000,
+        "{list}"
+    );
+}
