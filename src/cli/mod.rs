@@ -1,6 +1,7 @@
 //! The `mazearena` command line: one file per subcommand, each a thin layer over the
 //! engine and the runner.
 
+mod competition;
 mod matches;
 mod maze;
 mod prune;
@@ -51,6 +52,9 @@ pub enum Command {
     Match(matches::MatchCommand),
     /// Remove the stored traces of old practice matches (their results stay).
     Prune(prune::PruneArgs),
+    /// Competitions: create from a file, export, edit, list, results, organiser keys.
+    #[command(subcommand)]
+    Competition(competition::CompetitionCommand),
 }
 
 /// A step of the sandbox, when this process was started as `mazearena sandbox-exec ...`
@@ -86,6 +90,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Replay(args) => replay::run(args),
         Command::Match(cmd) => matches::run(cmd),
         Command::Prune(args) => prune::run(args),
+        Command::Competition(cmd) => competition::run(cmd),
     }
 }
 

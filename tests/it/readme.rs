@@ -11,6 +11,11 @@ use crate::support::{ADMIN, TestServer, root, sandbox};
 
 /// The ```sh blocks of the README section whose heading is `section`.
 fn blocks(section: &str) -> Vec<String> {
+    blocks_of(section, "sh")
+}
+
+/// The ```LANG blocks of the README section whose heading is `section`.
+fn blocks_of(section: &str, lang: &str) -> Vec<String> {
     let text = std::fs::read_to_string(root().join("README.md")).unwrap();
     let mut out = Vec::new();
     let mut in_section = false;
@@ -27,7 +32,7 @@ fn blocks(section: &str) -> Vec<String> {
         }
         if line.starts_with("## ") {
             in_section = line.trim_start_matches("## ") == section;
-        } else if in_section && line == "```sh" {
+        } else if in_section && line == format!("```{lang}") {
             block = Some(String::new());
         }
     }
@@ -290,4 +295,68 @@ async fn the_readme_scale_out_example_runs_as_written_on_postgresql() {
             .any(|w| w["role"] == "worker" && w["jobs"] == 2),
         "{health}"
     );
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn the_readme_competition_example_runs_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let work = dir.path().join("work");
+    std::fs::create_dir_all(work.join("class-2027")).unwrap();
+    for link in ["bots", "mazes"] {
+        std::os::unix::fs::symlink(root().join(link), work.join(link)).unwrap();
+    }
+    let database = format!("sqlite://{}", work.join("mazearena.db").display());
+    let server = TestServer::start_on(dir.path(), Some(&database), &["--jobs", "2"], &[]);
+    let addr = server.base.trim_start_matches("http://").to_string();
+    let file = blocks_of("Running a competition", "toml").remove(0);
+    std::fs::write(work.join("class-2027/competition.toml"), file).unwrap();
+    let blocks = blocks("Running a competition");
+    assert_eq!(blocks.len(), 4, "{blocks:?}");
+    let run = |block: &str| sh(&work, &block.replace("localhost:8080", &addr), &[]);
+    // The mazes and the competition, from its file.
+    run(&blocks[0]);
+    let (_, c) = server.get("/api/competitions/class-2027", None).await;
+    assert_eq!(
+        (c["phase"].as_str(), c["mazes"].as_array().map(Vec::len)),
+        (Some("open"), Some(5)),
+        "{c}"
+    );
+    // An entrant enters a bot; it is ranked with nothing done by hand.
+    let out = run(&blocks[1]);
+    assert!(out.contains("\"competition\":\"class-2027\""), "{out}");
+    let deadline = Instant::now() + Duration::from_secs(180);
+    loop {
+        let (_, b) = server
+            .get("/api/competitions/class-2027/leaderboard", None)
+            .await;
+        if b["standings"].as_array().is_some_and(|r| r.len() == 1) {
+            assert_eq!(b["standings"][0]["played"], 4, "{b}");
+            break;
+        }
+        assert!(Instant::now() < deadline, "never ranked: {b}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    // Closed now; the results come after the final run.
+    run(&blocks[2]);
+    loop {
+        let (_, c) = server.get("/api/competitions/class-2027", None).await;
+        if c["state"] == "final" {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no results: {c}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    let out = run(&blocks[3]);
+    assert_eq!(
+        out.matches("team-ada").count(),
+        2,
+        "the CLI's and the API's CSV: {out}"
+    );
+    // The export makes the same competition again on another database.
+    let again = sh(
+        &work,
+        "mazearena competition create class-2027-export/competition.toml --database sqlite://other.db",
+        &[],
+    );
+    assert!(again.contains("class-2027: Closed"), "{again}");
 }
