@@ -152,7 +152,12 @@ pub struct CompetitionView {
     pub public_tournament_id: Option<i64>,
 }
 
-async fn view(state: &AppState, c: &CompetitionRow, caller: &Caller) -> ApiResult<CompetitionView> {
+/// Competition `c` as `caller` may see it.
+pub(super) async fn view(
+    state: &AppState,
+    c: &CompetitionRow,
+    caller: &Caller,
+) -> ApiResult<CompetitionView> {
     let now = now_ms();
     let timeline = ops::timeline(c);
     let organiser = caller.can_organise();

@@ -20,6 +20,7 @@ pub fn page(title: &str, body: Markup) -> String {
                 header.site {
                     a.brand href="/" { "mazearena" }
                     a href="/" { "Leaderboard" }
+                    a href="/competitions" { "Competitions" }
                     a href="/tournaments" { "Tournaments" }
                     a href="/matches" { "Matches" }
                     a href="/bots" { "Bots" }

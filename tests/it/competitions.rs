@@ -269,6 +269,22 @@ async fn play_a_competition(server: &TestServer) {
     ] {
         assert_eq!(server.get_text(&page).await.0, 404, "{page}");
     }
+    let (s, page) = server.get_text("/competitions/class-2027").await;
+    assert_eq!(s, 200);
+    assert!(
+        page.contains("Sealed until the close") && page.contains("ada-bot"),
+        "{page}"
+    );
+    assert_eq!(
+        page.matches("<table class=\"data board\">").count(),
+        1,
+        "only the public board: {page}"
+    );
+    let (_, list) = server.get_text("/competitions").await;
+    assert!(
+        list.contains("/competitions/class-2027") && list.contains("/competitions/ranking"),
+        "{list}"
+    );
     let (_, pages) = server.get_text("/tournaments").await;
     assert!(
         !pages.contains("private ranking"),
@@ -431,6 +447,16 @@ async fn play_a_competition(server: &TestServer) {
             "{manifest}"
         );
     }
+    let (_, page) = server.get_text("/competitions/class-2027").await;
+    assert!(
+        page.contains("Final results") && !page.contains("Sealed until the close"),
+        "{page}"
+    );
+    assert_eq!(
+        page.matches("<table class=\"data board\">").count(),
+        2,
+        "both boards: {page}"
+    );
     let csv = server
         .client()
         .get(format!(

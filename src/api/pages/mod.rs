@@ -24,6 +24,7 @@ use crate::web::pages::{self as web, MatchLine, MatchPager, Pager, SortKey};
 use crate::web::viewer::ViewerData;
 
 mod board;
+mod competitions;
 
 /// How many tournaments the leaderboard lists, and recent matches a bot or maze page.
 const RECENT: i64 = 20;
@@ -38,6 +39,8 @@ pub(super) fn router() -> Router<AppState> {
         .route("/mazes/{id}", get(maze_page))
         .route("/matches", get(matches_page))
         .route("/matches/{id}", get(match_page))
+        .route("/competitions", get(competitions::competitions_page))
+        .route("/competitions/{name}", get(competitions::competition_page))
         .route("/tournaments", get(tournaments_page))
         .route("/tournaments/{id}", get(tournament_page))
         .route("/workers", get(workers_page))

@@ -6,10 +6,14 @@
 //! work without JavaScript; scripts only add live progress and the owner's logs.
 
 mod board;
+mod competitions;
 mod detail;
 mod lists;
 
 pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
+pub use competitions::{
+    CompetitionPage, CompetitionSummary, MY_SUBMISSIONS_JS, competition, competitions,
+};
 pub use detail::{
     BotPage, Cell, MATCH_STDERR_JS, MatchPage, OWNER_LOGS_JS, PROGRESS_JS, TournamentPage, bot,
     match_page, maze, tournament,

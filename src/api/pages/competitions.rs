@@ -1,0 +1,140 @@
+//! The competitions' pages, as an anonymous visitor sees them (the private board sealed
+//! until the close, ranking mazes by name only until revealed).
+
+use axum::extract::State;
+use axum::response::Html;
+
+use super::super::AppState;
+use super::super::auth::Caller;
+use super::super::competitions::{CompetitionView, view};
+use super::super::error::{ApiError, ApiResult, AppPath};
+use crate::registry::competitions::{self as ops, BoardKind};
+use crate::web::pages::{self as web, CompetitionSummary};
+
+fn summary(v: &CompetitionView) -> CompetitionSummary {
+    let when = |t: Option<crate::competition::Timestamp>| t.map(|t| format!("{} UTC", t.words()));
+    CompetitionSummary {
+        name: v.name.clone(),
+        title: v.title.clone(),
+        phase: serde_json::to_value(v.phase)
+            .ok()
+            .and_then(|p| p.as_str().map(str::to_string))
+            .unwrap_or_default(),
+        state: v.state.clone(),
+        kind: v.kind.clone(),
+        opens_at: when(v.opens_at),
+        freezes_at: when(v.freezes_at),
+        closes_at: when(v.closes_at),
+        entrants: v.entrants,
+    }
+}
+
+pub(super) async fn competitions_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
+    let mut rows = Vec::new();
+    for c in state.storage.list_competitions().await? {
+        rows.push(summary(&view(&state, &c, &Caller::Anonymous).await?));
+    }
+    Ok(Html(web::competitions(&rows)))
+}
+
+pub(super) async fn competition_page(
+    State(state): State<AppState>,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<Html<String>> {
+    let c = state
+        .storage
+        .get_competition(&name)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no competition {name:?}")))?;
+    let v = view(&state, &c, &Caller::Anonymous).await?;
+    let now = crate::storage::now_ms();
+    let (public, private) = if c.kind == "default" {
+        let board = super::super::competitions::default_board(
+            &state,
+            &Caller::Anonymous,
+            BoardKind::Public,
+        )
+        .await?;
+        (board, None)
+    } else {
+        (
+            ops::board(&state.storage, &c, BoardKind::Public, false, now).await?,
+            Some(ops::board(&state.storage, &c, BoardKind::Private, false, now).await?),
+        )
+    };
+    let results = if c.state.as_deref() == Some("final") {
+        Some(state.storage.competition_results(c.competition_id).await?)
+    } else {
+        None
+    };
+    let limits = v.limits;
+    let ms = |x: Option<u64>, unit: &str| {
+        x.map_or("the server's".to_string(), |x| format!("{x} {unit}"))
+    };
+    let settings = if c.kind == "default" {
+        Vec::new()
+    } else {
+        vec![
+            (
+                "matches per version per ranking maze".into(),
+                v.repeats.to_string(),
+            ),
+            (
+                "final run".into(),
+                if v.final_repeats > 0 {
+                    format!(
+                        "{} matches per selected version per private maze",
+                        v.final_repeats
+                    )
+                } else {
+                    "none: the private set's ranking matches decide".into()
+                },
+            ),
+            (
+                "versions per entrant per 24 hours".into(),
+                v.versions_per_day.to_string(),
+            ),
+            (
+                "practice matches per entrant per 24 hours".into(),
+                v.practice_per_day.to_string(),
+            ),
+            (
+                "what counts at the end".into(),
+                match v.selection.as_str() {
+                    "best_public" => "the version with the best public score".to_string(),
+                    "choice" => format!(
+                        "the entrant's choice of up to {} versions (else the latest)",
+                        v.max_selected
+                    ),
+                    _ => "the latest version".to_string(),
+                },
+            ),
+            ("time per move".into(), ms(limits.move_timeout_ms, "ms")),
+            ("time to start".into(), ms(limits.startup_timeout_ms, "ms")),
+            ("memory".into(), ms(limits.memory_limit_mb, "MiB")),
+        ]
+    };
+    let practice = v
+        .mazes
+        .iter()
+        .filter(|m| m.set == "practice")
+        .filter_map(|m| Some((m.maze_id?, m.name.clone())))
+        .collect();
+    let ranking = v
+        .mazes
+        .iter()
+        .filter(|m| m.set != "practice")
+        .map(|m| (m.set.clone(), m.name.clone(), m.maze_id))
+        .collect();
+    Ok(Html(web::competition(&web::CompetitionPage {
+        summary: summary(&v),
+        description: v.description.clone(),
+        rules: v.rules.clone(),
+        settings,
+        practice,
+        ranking,
+        public,
+        private,
+        results,
+    })))
+}
