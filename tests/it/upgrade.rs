@@ -1,7 +1,10 @@
 //! Databases made by earlier releases open in this one: their migrations run, and what
 //! they hold reads back the same. `tests/fixtures/db/made-by-0.1.0.db` was made by
 //! release 0.1.0 (a tournament of the shipped Python bots and a bot that quits, on two
-//! shipped mazes); `replay-N.json` are its own exports of matches N. An older data
+//! shipped mazes); `replay-N.json` are its own exports of matches N.
+//! `made-by-0.2.0.db` was made by release 0.2.0 before competitions (two bots in a
+//! tournament on two hidden mazes and a public one, a third bot's single match);
+//! `leaderboards-0.2.0.json` are its own leaderboards. An older data
 //! folder (uploaded bots' files on disk) moves into the database; a bundle damaged in
 //! the database is refused by the worker.
 
@@ -256,4 +259,40 @@ async fn a_damaged_bundle_is_refused_by_the_worker_and_its_match_says_why() {
     );
     // Nothing of it stayed in the worker's cache.
     assert!(!dir.path().join("worker/cache").join(&forged).exists());
+}
+
+/// The ranking of release 0.2.0 becomes the default competition: its leaderboards read
+/// back the same, and the default competition's board is the ranking.
+#[tokio::test]
+async fn a_database_of_release_0_2_0_keeps_its_ranking_as_the_default_competition() {
+    let dir = tempfile::tempdir().unwrap();
+    let to = dir.path().join("old.db");
+    std::fs::copy(root().join("tests/fixtures/db/made-by-0.2.0.db"), &to).unwrap();
+    let database = format!("sqlite://{}", to.display());
+    let old: Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("tests/fixtures/db/leaderboards-0.2.0.json")).unwrap(),
+    )
+    .unwrap();
+    let server = crate::support::TestServer::start_on(dir.path(), Some(&database), &["--jobs", "0"], &[]);
+    for (query, key) in [("", "ranking"), ("?scope=all", "all"), ("?tournament=1", "tournament_1")] {
+        let (s, now) = server.get(&format!("/api/leaderboard{query}"), None).await;
+        assert_eq!(s, 200, "{now}");
+        assert_eq!(now, old[key], "{key}");
+    }
+    let (_, list) = server.get("/api/competitions", None).await;
+    assert_eq!(list[0]["name"], "ranking", "{list}");
+    assert_eq!(list[0]["kind"], "default", "{list}");
+    let (_, board) = server.get("/api/competitions/ranking/leaderboard", None).await;
+    let lines = board["standings"].as_array().unwrap();
+    let ranking = old["ranking"].as_array().unwrap();
+    assert_eq!(lines.len(), ranking.len(), "{board}");
+    for (line, old) in lines.iter().zip(ranking) {
+        for field in ["rank", "bot_id", "version", "played", "finished", "mean_score"] {
+            assert_eq!(line[field], old[field], "{field}: {board}");
+        }
+    }
+    let (_, page) = server.get_text("/competitions/ranking").await;
+    assert!(page.contains("alpha") && page.contains("beta"), "{page}");
+    drop(server);
+    assert_standings_equal_recount(&database, &[1]).await;
 }
