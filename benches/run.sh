@@ -108,6 +108,19 @@ log "the sandbox's cost per match"
 log "HTTP under load"
 { bash benches/http.sh "${HTTP_ARGS[@]}"; echo; } >>"$out"
 
+log "ranking throughput"
+{
+  echo "## Ranking throughput in a competition"
+  echo
+  echo "\`bash benches/competition.sh $T_RUNS\`: a competition with 20 ranking mazes (10 public, 10 private,"
+  echo "12 x 12) x 3 repeats; the time from a version's upload to its full public and private"
+  echo "standing (every one of its 60 matches counted), beside the same 60 matches queued as a"
+  echo "plain tournament on the same server in the same round (the floor). \`--jobs 2\`, full sandbox."
+  echo
+  bash benches/competition.sh "$T_RUNS"
+  echo
+} >>"$out"
+
 log "pages one request at a time"
 {
   echo "## Pages, one request at a time"

@@ -34,8 +34,9 @@ pub const DEFAULT_MAZES: &[(&str, &str)] = &[
 ];
 
 /// Settings of `mazearena serve`; every flag can also come from its `MAZEARENA_*` variable.
-/// How often the competitions' clock runs: a ready version is queued on its
-/// competition's ranking sets within this long.
+/// How often the competitions' clock runs when nothing wakes it: a competition closes
+/// within this long of its time, and a version made ready elsewhere (another server's
+/// build) is queued on its competition's ranking sets within this long.
 const COMPETITION_TICK: Duration = Duration::from_millis(500);
 
 #[derive(Debug, Args)]
@@ -239,6 +240,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     let jobs = args.pool.jobs(0);
     let metrics = Metrics::new();
     let wake = Arc::new(Notify::new());
+    let clock_wake = wake.clone();
     let state = AppState {
         storage: storage.clone(),
         settings: Arc::new(Settings {
@@ -304,20 +306,31 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     }
     {
         // The competitions' clock: ranks new versions, and closes competitions on time.
+        // It runs every COMPETITION_TICK, and at once when an upload or a build wakes the
+        // workers; it wakes them when it queued matches.
         let storage = storage.clone();
         tokio::spawn(async move {
             let mut every = tokio::time::interval(COMPETITION_TICK);
             every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
             loop {
-                every.tick().await;
+                let woken = clock_wake.notified();
+                tokio::select! {
+                    _ = every.tick() => {}
+                    _ = woken => tokio::time::sleep(Duration::from_millis(10)).await,
+                }
                 let now = crate::storage::now_ms();
                 match crate::registry::competitions::tick(&storage, now).await {
-                    Ok(r) if r != Default::default() => tracing::info!(
-                        ranked = r.ranked,
-                        selected = r.selected,
-                        finalized = r.finalized,
-                        "competitions moved on"
-                    ),
+                    Ok(r) if r != Default::default() => {
+                        if r.ranked > 0 || r.selected > 0 {
+                            clock_wake.notify_waiters();
+                        }
+                        tracing::info!(
+                            ranked = r.ranked,
+                            selected = r.selected,
+                            finalized = r.finalized,
+                            "competitions moved on"
+                        )
+                    }
                     Ok(_) => {}
                     Err(e) => {
                         tracing::warn!(error = %e, "the competitions' clock failed; trying again")

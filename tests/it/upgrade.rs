@@ -273,8 +273,13 @@ async fn a_database_of_release_0_2_0_keeps_its_ranking_as_the_default_competitio
         &std::fs::read_to_string(root().join("tests/fixtures/db/leaderboards-0.2.0.json")).unwrap(),
     )
     .unwrap();
-    let server = crate::support::TestServer::start_on(dir.path(), Some(&database), &["--jobs", "0"], &[]);
-    for (query, key) in [("", "ranking"), ("?scope=all", "all"), ("?tournament=1", "tournament_1")] {
+    let server =
+        crate::support::TestServer::start_on(dir.path(), Some(&database), &["--jobs", "0"], &[]);
+    for (query, key) in [
+        ("", "ranking"),
+        ("?scope=all", "all"),
+        ("?tournament=1", "tournament_1"),
+    ] {
         let (s, now) = server.get(&format!("/api/leaderboard{query}"), None).await;
         assert_eq!(s, 200, "{now}");
         assert_eq!(now, old[key], "{key}");
@@ -282,12 +287,21 @@ async fn a_database_of_release_0_2_0_keeps_its_ranking_as_the_default_competitio
     let (_, list) = server.get("/api/competitions", None).await;
     assert_eq!(list[0]["name"], "ranking", "{list}");
     assert_eq!(list[0]["kind"], "default", "{list}");
-    let (_, board) = server.get("/api/competitions/ranking/leaderboard", None).await;
+    let (_, board) = server
+        .get("/api/competitions/ranking/leaderboard", None)
+        .await;
     let lines = board["standings"].as_array().unwrap();
     let ranking = old["ranking"].as_array().unwrap();
     assert_eq!(lines.len(), ranking.len(), "{board}");
     for (line, old) in lines.iter().zip(ranking) {
-        for field in ["rank", "bot_id", "version", "played", "finished", "mean_score"] {
+        for field in [
+            "rank",
+            "bot_id",
+            "version",
+            "played",
+            "finished",
+            "mean_score",
+        ] {
             assert_eq!(line[field], old[field], "{field}: {board}");
         }
     }
