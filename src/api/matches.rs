@@ -202,7 +202,7 @@ async fn create_match(
     {
         let wait_ms = quota
             .next_at
-            .map_or(crate::competition::DAY_MS, |t| t - now);
+            .map_or(crate::competition::DAY_MS, |t| t.0 - now);
         return Err(ApiError::TooManyRequests {
             message,
             retry_after_secs: (wait_ms.max(0) as u64).div_ceil(1000).max(1),

@@ -51,6 +51,14 @@ pub enum CompetitionCommand {
         #[command(flatten)]
         db: DatabaseArg,
     },
+    /// List a competition's entrants: their bot, versions and quotas ("2 of 5 versions
+    /// used in the last 24 hours; the next one at ...").
+    Entrants {
+        /// The competition's name.
+        name: String,
+        #[command(flatten)]
+        db: DatabaseArg,
+    },
     /// Change a competition's settings (times as RFC 3339, or `now`).
     Edit(EditArgs),
     /// Print the final results (a table, `--csv` or `--json`) and whether they equal a
@@ -140,6 +148,27 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                 Ok(())
             }
             CompetitionCommand::Edit(args) => edit(args).await,
+            CompetitionCommand::Entrants { name, db } => {
+                let storage = open(&db, false).await?;
+                let c = find(&storage, &name).await?;
+                let now = crate::storage::now_ms();
+                for e in storage.competition_entries(c.competition_id).await? {
+                    let versions = storage.submissions(&c, e.entrant_id).await?;
+                    let ranked = versions.iter().filter(|v| v.ranked).count();
+                    let versions_quota = ops::version_quota(&storage, &c, e.entrant_id, now).await?;
+                    let practice = ops::practice_quota(&storage, &c, e.entrant_id, now).await?;
+                    println!(
+                        "{}: bot {} ({}), {} versions ({ranked} ranked); {}; {}",
+                        e.entrant_name,
+                        e.bot_name,
+                        e.bot_id,
+                        versions.len(),
+                        versions_quota.message,
+                        practice.message
+                    );
+                }
+                Ok(())
+            }
             CompetitionCommand::Results { name, csv, json, db } => {
                 let storage = open(&db, false).await?;
                 let c = find(&storage, &name).await?;

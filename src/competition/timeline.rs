@@ -60,8 +60,8 @@ pub struct Quota {
     pub used: u32,
     /// Allowed in any 24 hours.
     pub limit: u32,
-    /// When one more is allowed (unix ms), if none is allowed now.
-    pub next_at: Option<i64>,
+    /// When one more is allowed, if none is allowed now.
+    pub next_at: Option<super::Timestamp>,
     /// The same in words: "2 of 5 versions used in the last 24 hours".
     pub message: String,
 }
@@ -82,7 +82,7 @@ impl Quota {
         // the (used - limit + 1)-th oldest leaves it.
         let next_at = (used >= limit && limit > 0).then(|| {
             let index = (used - limit) as usize;
-            recent.get(index).map_or(now, |t| t + DAY_MS)
+            super::Timestamp(recent.get(index).map_or(now, |t| t + DAY_MS))
         });
         let mut message = if limit == 0 {
             format!("no {what} allowed")
@@ -90,10 +90,7 @@ impl Quota {
             format!("{used} of {limit} {what} used in the last 24 hours")
         };
         if let Some(next) = next_at {
-            message.push_str(&format!(
-                "; the next one at {} UTC",
-                super::spec::Timestamp(next).words()
-            ));
+            message.push_str(&format!("; the next one at {} UTC", next.words()));
         }
         Quota {
             used,
@@ -112,6 +109,7 @@ impl Quota {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::competition::Timestamp;
 
     const H: i64 = 3_600_000;
 
@@ -153,7 +151,7 @@ mod tests {
         // Full: the next one when the oldest of the window turns 24 hours old.
         let q = Quota::at(&[now - H, now - 10 * H], 2, now, "versions");
         assert_eq!(q.used, 2);
-        assert_eq!(q.next_at, Some(now - 10 * H + DAY_MS));
+        assert_eq!(q.next_at, Some(Timestamp(now - 10 * H + DAY_MS)));
         assert!(!q.allows_one_more());
         assert!(
             q.message
@@ -163,7 +161,7 @@ mod tests {
         );
         // Over the limit (the limit was lowered): the next one waits for all but 0 to leave.
         let q = Quota::at(&[now - H, now - 2 * H, now - 3 * H], 1, now, "versions");
-        assert_eq!(q.next_at, Some(now - H + DAY_MS));
+        assert_eq!(q.next_at, Some(Timestamp(now - H + DAY_MS)));
         // A zero quota allows nothing, ever.
         let q = Quota::at(&[], 0, now, "practice matches");
         assert!(!q.allows_one_more());

@@ -654,7 +654,9 @@ pub fn deciding_tournament(c: &CompetitionRow) -> Option<i64> {
 }
 
 /// Writes the results of a competition whose final run is played: each entrant's best
-/// selected version on the deciding set, with its manifest and the recount check.
+/// selected version on the deciding set, with its manifest (what it is, what it played:
+/// each match's maze hash, seed, status and score, so that anyone can count the mean
+/// again or play a match again with `mazearena run`) and the recount check.
 async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
     let Some(t) = deciding_tournament(c) else {
         return Ok(false);
@@ -696,6 +698,20 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
         .into_iter()
         .map(|(repeat, seed)| serde_json::json!({"repeat": repeat, "seed": seed}))
         .collect();
+    let matches = storage.tournament_matches(t).await?;
+    let limits = c.limit_set();
+    let mut replay = String::from(
+        "mazearena run --maze MAZE_FILE --bot COMMAND --bot-dir FOLDER_OF_THE_BUNDLE --seed SEED",
+    );
+    if let Some(ms) = limits.move_timeout_ms {
+        replay.push_str(&format!(" --move-timeout-ms {ms}"));
+    }
+    if let Some(ms) = limits.startup_timeout_ms {
+        replay.push_str(&format!(" --startup-timeout-ms {ms}"));
+    }
+    if let Some(mb) = limits.memory_limit_mb {
+        replay.push_str(&format!(" --memory-limit-mb {mb}"));
+    }
     let mut rows = Vec::new();
     for (rank, s) in selection::rank_entrants(&scores) {
         let Some(row) = kept.iter().find(|r| r.bot_version_id == s.bot_version_id) else {
@@ -714,6 +730,17 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
                 "the running sums differ from the recount of the match records");
         }
         let version = storage.get_bot_version(s.bot_version_id).await?;
+        let played: Vec<serde_json::Value> = matches
+            .iter()
+            .filter(|m| m.bot_version_id == s.bot_version_id)
+            .map(|m| {
+                serde_json::json!({
+                    "match_id": m.match_id, "maze": m.maze_name, "maze_hash": m.maze_hash,
+                    "repeat": m.repeat, "seed": m.seed, "status": m.status.to_string(),
+                    "score": m.score,
+                })
+            })
+            .collect();
         let manifest = serde_json::json!({
             "competition": c.name,
             "bot_version_id": s.bot_version_id,
@@ -731,7 +758,8 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
                 "finished": recount.map(|r| r.finished),
                 "mean_score": recount.map(|r| r.mean_score),
             },
-            "replay": "for each maze and seed: mazearena run --maze MAZE_FILE --bot COMMAND --bot-dir BUNDLE_DIR --seed SEED (with the limits above)",
+            "matches": played,
+            "replay": replay,
         });
         rows.push(ResultRow {
             rank,

@@ -457,6 +457,45 @@ async fn play_a_competition(server: &TestServer) {
         2,
         "both boards: {page}"
     );
+    // Any row's match plays again exactly with `mazearena run`, from its manifest.
+    let manifest: Value = serde_json::from_str(rows[0]["manifest"].as_str().unwrap()).unwrap();
+    let played = &manifest["matches"][0];
+    assert_eq!(
+        manifest["matches"].as_array().unwrap().len(),
+        2,
+        "{manifest}"
+    );
+    let (_, mazes) = server.get("/api/mazes", Some(ADMIN)).await;
+    let id = mazes
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["hash"] == played["maze_hash"])
+        .unwrap()["maze_id"]
+        .as_i64()
+        .unwrap();
+    let (_, m) = server.get(&format!("/api/mazes/{id}"), Some(ADMIN)).await;
+    let layout = m["layout"].as_str().unwrap().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("maze.txt");
+    std::fs::write(&file, layout).unwrap();
+    let seed = played["seed"].to_string();
+    let again = crate::support::mazearena_json(&[
+        "run",
+        "--maze",
+        file.to_str().unwrap(),
+        "--bot",
+        "python3 simple_bot.py",
+        "--bot-dir",
+        "bots/python",
+        "--seed",
+        &seed,
+        "--move-timeout-ms",
+        "2000",
+        "--json",
+    ]);
+    assert_eq!(again["score"], played["score"], "{again} {played}");
+    assert_eq!(again["status"], played["status"]);
     let csv = server
         .client()
         .get(format!(

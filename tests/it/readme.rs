@@ -347,10 +347,15 @@ async fn the_readme_competition_example_runs_as_written() {
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
     let out = run(&blocks[3]);
+    assert!(out.contains("team-ada: bot ada-bot"), "the entrants: {out}");
+    assert!(
+        out.contains("1 of 5 versions used in the last 24 hours"),
+        "{out}"
+    );
     assert_eq!(
         out.matches("team-ada").count(),
-        2,
-        "the CLI's and the API's CSV: {out}"
+        3,
+        "the entrants and the CLI's and the API's CSV: {out}"
     );
     // The export makes the same competition again on another database.
     let again = sh(
