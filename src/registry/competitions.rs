@@ -850,3 +850,147 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::generator::generate;
+    use crate::engine::mazefile::numeric;
+    use crate::storage::now_ms;
+    use crate::storage::test_support::{backends, plain_version};
+
+    fn maze(seed: u64) -> MazeText {
+        MazeText {
+            name: format!("m{seed}"),
+            layout: numeric::write(&generate(12, seed).unwrap()),
+        }
+    }
+
+    fn spec(now: i64) -> Spec<MazeText> {
+        Spec {
+            name: "c".into(),
+            title: "C".into(),
+            description: String::new(),
+            rules: String::new(),
+            opens_at: Timestamp(now - 1000),
+            closes_at: Timestamp(now + 3_600_000),
+            freeze_hours: None,
+            repeats: 2,
+            final_repeats: 1,
+            versions_per_day: 5,
+            practice_per_day: 5,
+            selection: Rule::Latest,
+            max_selected: 1,
+            reveal_private_mazes: true,
+            limits: Limits::default(),
+            mazes: MazeSets {
+                practice: vec![maze(7001)],
+                public: vec![maze(7002)],
+                private: vec![maze(7003), maze(7004)],
+            },
+        }
+    }
+
+    /// Plays every waiting match of the competition's tournaments by hand: finished,
+    /// score `score`.
+    async fn play_all(db: &Storage, score: f64) {
+        db.run_sql_for_tests(&format!(
+            "update match set status = 'finished', score = {score}, total_steps = 10
+             where status = 'queued' and tournament_id is not null"
+        ))
+        .await;
+    }
+
+    async fn sealed(db: &Storage, t: Option<i64>) -> bool {
+        db.get_tournament(t.unwrap()).await.unwrap().unwrap().sealed
+    }
+
+    #[tokio::test]
+    async fn each_step_of_the_clock_happens_once_and_the_results_equal_a_recount() {
+        for (db, _guard) in backends().await {
+            let now = now_ms();
+            let c = create(&db, spec(now)).await.unwrap();
+            assert!(sealed(&db, c.private_tournament_id).await);
+            assert!(!sealed(&db, c.public_tournament_id).await);
+            // A ranking maze must not be public, a practice maze not hidden.
+            let mut bad = spec(now);
+            bad.name = "d".into();
+            bad.mazes.public = vec![maze(7001)];
+            let err = create(&db, bad).await.unwrap_err();
+            assert!(err.to_string().contains("must be hidden"), "{err}");
+            let e = db.create_entrant("e", "[]", "k").await.unwrap();
+            let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
+            db.set_bot_entrant(v.bot_id, e.entrant_id).await.unwrap();
+            db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
+                .await
+                .unwrap();
+            // Ranked once: 1 public x 2 + 2 private x 2 matches, every seed secret.
+            assert_eq!(tick(&db, now).await.unwrap().ranked, 1);
+            assert_eq!(tick(&db, now).await.unwrap(), TickReport::default());
+            let seeds = c.seed_list();
+            let queued = db
+                .tournament_matches(c.public_tournament_id.unwrap())
+                .await
+                .unwrap();
+            assert_eq!(queued.len(), 2);
+            assert_eq!(
+                queued.iter().map(|m| m.seed).collect::<Vec<_>>(),
+                seeds[..2].to_vec()
+            );
+            play_all(&db, 20.0).await;
+            let public = board(&db, &c, BoardKind::Public, false, now).await.unwrap();
+            assert_eq!(public.standings.len(), 1);
+            let private = board(&db, &c, BoardKind::Private, false, now)
+                .await
+                .unwrap();
+            assert!(private.sealed && private.standings.is_empty());
+            let private = board(&db, &c, BoardKind::Private, true, now).await.unwrap();
+            assert_eq!(private.standings[0].played, 4);
+            // Closed: the private set unsealed, the selection and final run made once.
+            let c = edit(
+                &db,
+                c,
+                Patch {
+                    closes_at: Some(Timestamp(now)),
+                    ..Patch::default()
+                },
+                now,
+            )
+            .await
+            .unwrap();
+            let later = now + 1;
+            assert_eq!(tick(&db, later).await.unwrap().selected, 1);
+            assert!(!sealed(&db, c.private_tournament_id).await);
+            let c = db.get_competition("c").await.unwrap().unwrap();
+            assert!(!db.start_final(&c, &[v.bot_version_id], &[]).await.unwrap());
+            assert!(sealed(&db, c.final_tournament_id).await);
+            assert_eq!(
+                tick(&db, later).await.unwrap(),
+                TickReport::default(),
+                "the final run waits"
+            );
+            play_all(&db, 30.0).await;
+            assert_eq!(tick(&db, later).await.unwrap().finalized, 1);
+            assert_eq!(tick(&db, later).await.unwrap(), TickReport::default());
+            let c = db.get_competition("c").await.unwrap().unwrap();
+            assert!(
+                !db.write_results(&c, &[], &[]).await.unwrap(),
+                "written once"
+            );
+            let results = db.competition_results(c.competition_id).await.unwrap();
+            assert_eq!(results.len(), 1);
+            assert_eq!((results[0].played, results[0].mean_score), (2, 30.0));
+            assert!(recount_differences(&db, &c).await.unwrap().is_empty());
+            assert!(!sealed(&db, c.final_tournament_id).await);
+            // Revealed: the private mazes are public now.
+            for m in db.competition_mazes(c.competition_id).await.unwrap() {
+                let row = db.get_maze(m.maze_id).await.unwrap().unwrap();
+                assert_eq!(row.hidden, m.maze_set == "public", "{}", m.name);
+            }
+            // A changed match record shows as a difference from the snapshot.
+            db.run_sql_for_tests("update match set score = 31.0 where tournament_id is not null")
+                .await;
+            assert_eq!(recount_differences(&db, &c).await.unwrap().len(), 1);
+        }
+    }
+}

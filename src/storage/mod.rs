@@ -500,6 +500,13 @@ pub(crate) mod test_support {
         }
     }
 
+    impl Storage {
+        /// Runs `sql` (a test's way of playing or changing matches by hand).
+        pub async fn run_sql_for_tests(&self, sql: &str) {
+            sqlx::query(sql).execute(self.pool()).await.unwrap();
+        }
+    }
+
     /// A fresh SQLite database in a temporary directory (kept alive by the guard).
     pub async fn fresh() -> (Storage, tempfile::TempDir) {
         let dir = tempfile::tempdir().unwrap();
