@@ -4,6 +4,8 @@
 //! - [`engine`]: the pure referee (maze model and files, rules, score, solver,
 //!   generator, SVG). No I/O.
 //! - [`protocol`]: the bot protocol v1 messages and the strict decoding of bot replies.
+//! - [`competition`]: the pure rules of competitions (their file, timeline, quotas,
+//!   final selection and ranking). No I/O.
 //! - [`runner`]: runs one bot process against one maze and returns a [`runner::MatchRecord`].
 //! - [`storage`]: the only SQL: bots, mazes, the match queue, tournaments, leaderboards.
 //! - [`registry`]: registering bots and versions (their files stored as bundles in

@@ -1,8 +1,9 @@
 //! The HTTP/JSON API (axum): thin handlers that extract, call storage, and answer JSON.
 //!
 //! Routes (see `GET /api/openapi.json`, generated from these handlers):
-//! bots, mazes, matches, tournaments, leaderboard, plus `/healthz` and `/metrics`; and
-//! the web pages ([`pages`]: `/`, `/bots`, `/mazes`, `/matches`, `/tournaments`).
+//! bots, entrants, competitions, mazes, matches, tournaments, leaderboard, plus
+//! `/healthz` and `/metrics`; and the web pages ([`pages`]: `/`, `/competitions`,
+//! `/bots`, `/mazes`, `/matches`, `/tournaments`).
 //! Every error has the shape `{"error":{"code":..,"message":..}}` ([`error`]).
 
 pub mod auth;

@@ -9,6 +9,9 @@
 //!   links with their modes; no timestamps, order or archive format).
 //! - [`cache`]: a worker's local cache of unpacked bundles, keyed and verified by hash,
 //!   evicted by size.
+//! - [`competitions`]: creating and editing competitions, entering bots, quotas, the
+//!   boards as each caller may see them, and the clock that ranks new versions and
+//!   writes the results.
 //! - [`mazes`]: admitting a maze (parsed, made canonical, solved, stored once by layout).
 //! - [`migrate`]: moving versions stored in an older data folder into the database.
 //! - [`tokens`]: owner and admin tokens.

@@ -406,7 +406,8 @@ impl Storage {
         .await?)
     }
 
-    /// The competitions (not final) other than `competition_id` that use maze `maze_id`.
+    /// Whether a competition other than `competition_id` whose results are not final
+    /// uses maze `maze_id` (its layout must then stay hidden).
     ///
     /// # Errors
     /// Database failures.

@@ -339,3 +339,107 @@ async fn the_offline_replay_file_shows_the_same() {
     drive_viewer(&b, &trace, "offline").await;
     b.quit().await;
 }
+
+#[tokio::test]
+async fn a_competition_page_shows_an_entrants_submissions_in_a_real_browser() {
+    let Some(b) =
+        Browser::start("a_competition_page_shows_an_entrants_submissions_in_a_real_browser").await
+    else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "2"]);
+    let (_, o) = server
+        .post("/api/organisers", json!({"name": "teacher"}), Some(ADMIN))
+        .await;
+    let organiser = o["key"].as_str().unwrap().to_string();
+    let maze = |name: &str, seed: u64| {
+        json!({"name": name, "layout": mazearena::engine::mazefile::numeric::write(
+            &mazearena::engine::generator::generate(12, seed).unwrap())})
+    };
+    let now = mazearena::storage::now_ms();
+    let at = |ms: i64| mazearena::competition::Timestamp(ms).rfc3339();
+    let (s, c) = server
+        .post(
+            "/api/competitions",
+            json!({"name": "spring", "title": "Spring <b>cup</b>", "rules": "Be <i>kind</i>.",
+                   "opens_at": at(now - 60_000), "closes_at": at(now + 3_600_000),
+                   "mazes": {"practice": [maze("warm-up", 8001)], "public": [maze("p", 8002)],
+                             "private": [maze("q", 8003)]}}),
+            Some(&organiser),
+        )
+        .await;
+    assert_eq!(s, 201, "{c}");
+    let (_, e) = server
+        .post("/api/entrants", json!({"name": "team-b"}), None)
+        .await;
+    let key = e["key"].as_str().unwrap().to_string();
+    let body =
+        json!({"name": "b-bot", "command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (_, bot) = server.post("/api/bots", body, Some(&key)).await;
+    let (s, v) = server
+        .post(
+            "/api/competitions/spring/entries",
+            json!({"bot_id": bot["bot_id"]}),
+            Some(&key),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let (_, board) = server
+            .get("/api/competitions/spring/leaderboard", None)
+            .await;
+        if board["standings"].as_array().is_some_and(|r| r.len() == 1) {
+            break;
+        }
+        assert!(Instant::now() < deadline, "never ranked: {board}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    b.open(
+        &format!("{}/competitions", server.base),
+        "table.competitions",
+    )
+    .await;
+    b.click("table.competitions a[href='/competitions/spring']")
+        .await;
+    b.open(
+        &format!("{}/competitions/spring", server.base),
+        "table.board",
+    )
+    .await;
+    let html = b.source().await;
+    // Texts are text (no markup of the organiser's runs), the private board is sealed.
+    assert!(
+        html.contains("Spring &lt;b&gt;cup&lt;/b&gt;")
+            && html.contains("Be &lt;i&gt;kind&lt;/i&gt;."),
+        "{html}"
+    );
+    assert!(b.text("p.sealed").await.contains("Sealed until the close"));
+    assert!(b.text("table.board").await.contains("team-b"));
+    b.client
+        .find(fantoccini::Locator::Css("#mine-key"))
+        .await
+        .unwrap()
+        .send_keys(&key)
+        .await
+        .unwrap();
+    b.click("#mine-form button").await;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !b
+        .text("#mine")
+        .await
+        .contains("1 of 5 versions used in the last 24 hours")
+    {
+        assert!(
+            Instant::now() < deadline,
+            "my submissions did not appear: {}",
+            b.text("#mine").await
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let row = b.text("table.submissions tbody tr").await;
+    assert!(row.contains("ranked") && row.contains("1/1"), "{row}");
+    b.screenshot("competition-page").await;
+    b.quit().await;
+}
