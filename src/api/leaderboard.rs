@@ -32,7 +32,8 @@ pub struct LeaderboardQuery {
 /// The standings, best mean score first.
 #[utoipa::path(get, path = "/api/leaderboard", tag = "leaderboard",
     params(LeaderboardQuery),
-    responses((status = 200, body = [Standing]), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
+    responses((status = 200, body = [Standing]), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody),
+        (status = 409, body = ErrorBody, description = "the tournament ranks for a competition: see its leaderboard")))]
 async fn get_leaderboard(
     State(state): State<AppState>,
     caller: Caller,
@@ -40,13 +41,14 @@ async fn get_leaderboard(
 ) -> ApiResult<axum::Json<Vec<Standing>>> {
     let scope = match (q.tournament, q.scope.as_deref()) {
         (Some(id), None) => {
-            let visible = state
+            let t = state
                 .storage
                 .get_tournament(id)
                 .await?
-                .is_some_and(|t| !t.sealed || caller.can_organise());
-            if !visible {
-                return Err(ApiError::NotFound(format!("no tournament {id}")));
+                .filter(|t| !t.sealed || caller.can_organise())
+                .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+            if let Some(c) = t.competition_id.filter(|_| !caller.can_organise()) {
+                return Err(competition_standings_elsewhere(&state, id, c).await?);
             }
             Scope::Tournament(id)
         }
@@ -65,6 +67,30 @@ async fn get_leaderboard(
     };
     let rows = state.storage.leaderboard(scope).await?;
     Ok(axum::Json(settled_for_caller(&state, rows, &caller).await?))
+}
+
+/// The 409 for the standings of tournament `id`, which ranks for competition
+/// `competition_id`: anyone but the organisers reads them on the competition's boards,
+/// which apply its rules (settled versions only, the freeze, the private set sealed).
+///
+/// # Errors
+/// Database failures.
+pub(super) async fn competition_standings_elsewhere(
+    state: &AppState,
+    id: i64,
+    competition_id: i64,
+) -> ApiResult<ApiError> {
+    let name = state
+        .storage
+        .list_competitions()
+        .await?
+        .into_iter()
+        .find(|c| c.competition_id == competition_id)
+        .map_or_else(|| competition_id.to_string(), |c| c.name);
+    Ok(ApiError::Conflict(format!(
+        "tournament {id} ranks for competition {name}: its standings are on \
+         GET /api/competitions/{name}/leaderboard"
+    )))
 }
 
 /// The standings as `caller` may see them ([`for_caller`]), and for anyone but the
@@ -113,13 +139,21 @@ pub(super) async fn settled_for_caller(
 /// whose counted matches include a hidden maze, unless the caller is the admin.
 /// A tournament's standings as `caller` may see them, and whether they are sealed:
 /// while a tournament with hidden mazes is not complete, anyone but the admin gets no
-/// standings (each match's result would show as the change in its bot's mean).
+/// standings (each match's result would show as the change in its bot's mean); a
+/// competition's tournament (`in_competition`) shows its standings to the admin and
+/// organisers only (everyone else reads them on the competition's boards, under its
+/// rules: the freeze, the private set sealed).
 pub(super) fn tournament_for_caller(
     rows: Vec<Standing>,
     caller: &Caller,
     complete: bool,
+    in_competition: bool,
 ) -> (Vec<Standing>, bool) {
-    let sealed = !caller.is_admin() && !complete && rows.iter().any(|r| r.hidden_played > 0);
+    let sealed = if in_competition {
+        !caller.can_organise()
+    } else {
+        !caller.is_admin() && !complete && rows.iter().any(|r| r.hidden_played > 0)
+    };
     if sealed {
         (Vec::new(), true)
     } else {

@@ -160,6 +160,7 @@ async fn get_tournament(
         state.storage.leaderboard(Scope::Tournament(id)).await?,
         &caller,
         t.done >= t.total,
+        t.competition_id.is_some(),
     );
     Ok(axum::Json(TournamentView {
         tournament_id: t.tournament_id,

@@ -818,13 +818,20 @@ pub async fn recount_differences(storage: &Storage, c: &CompetitionRow) -> Resul
     Ok(differ)
 }
 
-/// The results as CSV: a header, then one row per entrant.
+/// The results as CSV: a header, then one row per entrant. A name that a spreadsheet
+/// would take for a formula (starting with `=`, `+`, `-`, `@`, a tab or a carriage
+/// return) is written after a `'`.
 pub fn results_csv(rows: &[ResultRow]) -> String {
     let field = |s: &str| {
+        let s = if s.starts_with(['=', '+', '-', '@', '\t', '\r']) {
+            format!("'{s}")
+        } else {
+            s.to_string()
+        };
         if s.contains([',', '"', '\n', '\r']) {
             format!("\"{}\"", s.replace('"', "\"\""))
         } else {
-            s.to_string()
+            s
         }
     };
     let mut out = String::from(
@@ -903,6 +910,35 @@ mod tests {
 
     async fn sealed(db: &Storage, t: Option<i64>) -> bool {
         db.get_tournament(t.unwrap()).await.unwrap().unwrap().sealed
+    }
+
+    #[test]
+    fn the_csv_quotes_what_it_must_and_no_name_is_a_formula() {
+        let row = |entrant: &str, bot: &str| ResultRow {
+            rank: 1,
+            entrant_id: 1,
+            entrant_name: entrant.into(),
+            bot_id: 1,
+            bot_name: bot.into(),
+            bot_version_id: 1,
+            version: 2,
+            played: 4,
+            finished: 3,
+            mean_score: 260.5,
+            finish_rate: 0.75,
+            manifest: r#"{"bundle_sha256":"abc"}"#.into(),
+        };
+        let csv = results_csv(&[row("team, \"a\"", "=cmd|' /c calc'!A1"), row("b", "@sum")]);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(
+            lines[0],
+            "rank,entrant,bot,version,played,finished,mean_score,finish_rate,bundle_sha256"
+        );
+        assert_eq!(
+            lines[1],
+            r#"1,"team, ""a""",'=cmd|' /c calc'!A1,2,4,3,260.5,0.75,abc"#
+        );
+        assert_eq!(lines[2], "1,b,'@sum,2,4,3,260.5,0.75,abc");
     }
 
     #[tokio::test]

@@ -13,6 +13,9 @@ use serde_json::{Value, json};
 use crate::faults::{new_database, postgres};
 use crate::support::{ADMIN, TestServer, simple_bot_files};
 
+/// The competition opens this long after the test creates it.
+const OPENS_IN_MS: i64 = 3000;
+
 /// RFC 3339 of unix ms.
 fn at(ms: i64) -> String {
     mazearena::competition::Timestamp(ms).rfc3339()
@@ -78,7 +81,7 @@ async fn play_a_competition(server: &TestServer) {
     let spec = json!({
         "name": "class-2027", "title": "Class of 2027",
         "description": "Find the centre, fast.", "rules": "One bot per team.",
-        "opens_at": at(start - 60_000), "closes_at": at(start + 3_600_000),
+        "opens_at": at(start + OPENS_IN_MS), "closes_at": at(start + 3_600_000),
         "repeats": 2, "final_repeats": 1, "versions_per_day": 2, "practice_per_day": 1,
         "selection": "best_public",
         "limits": {"move_timeout_ms": 2000},
@@ -94,7 +97,7 @@ async fn play_a_competition(server: &TestServer) {
         .post("/api/competitions", spec.clone(), Some(&organiser))
         .await;
     assert_eq!(s, 201, "{c}");
-    assert_eq!(c["phase"], "open");
+    assert_eq!(c["phase"], "upcoming");
     let (s, v) = server
         .post("/api/competitions", spec, Some(&organiser))
         .await;
@@ -161,7 +164,21 @@ async fn play_a_competition(server: &TestServer) {
         .await;
     assert!(s == 403 || s == 409, "{s} {v}");
 
-    // Ranked automatically: the public board fills in with nothing done by hand.
+    // Nothing is ranked before the opening; then, on the server's clock, every entered
+    // bot is, with nothing done by hand: the public board fills in.
+    let (_, mine) = server
+        .get(
+            "/api/competitions/class-2027/submissions",
+            Some(&teams[2].0),
+        )
+        .await;
+    if now_ms() < start + OPENS_IN_MS {
+        assert_eq!(mine["versions"][0]["status"], "waiting", "{mine}");
+    }
+    let (_, board) = server
+        .get("/api/competitions/class-2027/leaderboard", Some(&organiser))
+        .await;
+    assert!(now_ms() >= start + OPENS_IN_MS || board["standings"].as_array().unwrap().is_empty());
     let board = wait_for(
         server,
         "/api/competitions/class-2027/leaderboard",
@@ -301,6 +318,53 @@ async fn play_a_competition(server: &TestServer) {
         "{private_board}"
     );
 
+    // The public set's tournament shows its standings on the competition's board only.
+    let public_t = private_t - 1;
+    let (s, v) = server
+        .get(&format!("/api/leaderboard?tournament={public_t}"), None)
+        .await;
+    assert_eq!(s, 409, "{v}");
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("/api/competitions/class-2027/leaderboard")
+    );
+    let (_, t) = server
+        .get(&format!("/api/tournaments/{public_t}"), Some(&teams[0].0))
+        .await;
+    assert_eq!(
+        (
+            t["standings_sealed"].as_bool(),
+            t["standings"].as_array().map(Vec::len)
+        ),
+        (Some(true), Some(0)),
+        "{t}"
+    );
+    let (_, t) = server
+        .get(&format!("/api/tournaments/{public_t}"), Some(&organiser))
+        .await;
+    assert_eq!(t["standings"].as_array().map(Vec::len), Some(3), "{t}");
+    assert_eq!(
+        server.get_text(&format!("/?tournament={public_t}")).await.0,
+        409
+    );
+    let (_, home) = server.get_text("/").await;
+    assert!(
+        !home.contains("ada-bot"),
+        "the home page shows a competition's standings: {home}"
+    );
+    // Frozen from now on (2 hours before a close 1 hour away): a version uploaded now
+    // shows on the public board to the organisers, not to anyone else.
+    let (s, v) = call(
+        Method::PATCH,
+        "/api/competitions/class-2027".into(),
+        Some(json!({"freeze_hours": 2})),
+        Some(organiser.clone()),
+    )
+    .await;
+    assert_eq!((s, v["phase"].as_str()), (200, Some("frozen")), "{v}");
+
     // Quotas: 2 versions a day (the first counts); the third is refused and says when.
     let (ada, ada_bot) = (teams[0].0.clone(), teams[0].1);
     let upload = json!({"command": "python3 simple_bot.py", "files": simple_bot_files()});
@@ -358,7 +422,8 @@ async fn play_a_competition(server: &TestServer) {
             .contains("1 of 1 practice matches"),
         "{v}"
     );
-    // Ada's second version gets ranked too.
+    // Ada's second version gets ranked too; she sees its public numbers, the public
+    // board (frozen) still shows her first version but to the organisers.
     wait_for(
         server,
         "/api/competitions/class-2027/submissions",
@@ -366,6 +431,26 @@ async fn play_a_competition(server: &TestServer) {
         |v| v["versions"][0]["status"] == "ranked",
     )
     .await;
+    let version_of_ada = |board: &Value| {
+        board["standings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| l["entrant"] == "ada")
+            .unwrap()["version"]
+            .as_i64()
+    };
+    for token in [None, Some(ada.as_str())] {
+        let (_, board) = server
+            .get("/api/competitions/class-2027/leaderboard", token)
+            .await;
+        assert_eq!(version_of_ada(&board), Some(1), "{board}");
+        assert!(board["frozen_at"].is_string(), "{board}");
+    }
+    let (_, board) = server
+        .get("/api/competitions/class-2027/leaderboard", Some(&organiser))
+        .await;
+    assert_eq!(version_of_ada(&board), Some(2), "{board}");
     // No results before the close.
     let (s, _) = server
         .get("/api/competitions/class-2027/results", None)

@@ -59,13 +59,17 @@ pub(super) async fn leaderboard_page(
             ));
         }
         (Some(id), None) => {
-            if state
+            let t = state
                 .storage
                 .get_tournament(id)
                 .await?
-                .is_none_or(|t| t.sealed)
-            {
-                return Err(ApiError::NotFound(format!("no tournament {id}")));
+                .filter(|t| !t.sealed)
+                .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+            if let Some(c) = t.competition_id {
+                return Err(super::super::leaderboard::competition_standings_elsewhere(
+                    state, id, c,
+                )
+                .await?);
             }
             (Scope::Tournament(id), board(Scope::Tournament(id)).await?)
         }
@@ -120,7 +124,11 @@ pub(super) async fn leaderboard_page(
             )
         }
     };
-    let latest = match (scope, tournaments.first()) {
+    // The latest tournament outside the competitions (theirs are on their own pages).
+    let latest = match (
+        scope,
+        tournaments.iter().find(|t| t.competition_id.is_none()),
+    ) {
         (Scope::Tournament(_), _) | (_, None) => None,
         (_, Some(t)) => Some((
             t.clone(),

@@ -288,6 +288,7 @@ async fn tournament_page(
         state.storage.leaderboard(Scope::Tournament(id)).await?,
         &Caller::Anonymous,
         t.done >= t.total,
+        t.competition_id.is_some(),
     );
     let mut bots: Vec<(i64, String)> = Vec::new();
     let mut mazes: Vec<(i64, String)> = Vec::new();
