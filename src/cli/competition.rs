@@ -223,17 +223,13 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
 }
 
 async fn open(db: &DatabaseArg, create: bool) -> anyhow::Result<Storage> {
-    if !create && !db.database.starts_with("postgres") {
-        let file = db.database.trim_start_matches("sqlite://");
-        let file = file.split('?').next().unwrap_or(file);
-        anyhow::ensure!(
-            Path::new(file).exists(),
-            "no database at {file} (give --database)"
-        );
+    if create {
+        Storage::open(&db.database)
+            .await
+            .with_context(|| format!("cannot open the database {}", db.database))
+    } else {
+        super::open_existing(&db.database).await
     }
-    Storage::open(&db.database)
-        .await
-        .with_context(|| format!("cannot open the database {}", db.database))
 }
 
 async fn find(storage: &Storage, name: &str) -> anyhow::Result<CompetitionRow> {

@@ -8,7 +8,6 @@ use clap::{Args, Subcommand};
 
 use crate::engine::mazefile;
 use crate::runner::MatchRecord;
-use crate::storage::Storage;
 
 /// `mazearena match ...`.
 #[derive(Debug, Subcommand)]
@@ -29,9 +28,12 @@ pub struct ShowArgs {
         default_value = "sqlite://mazearena.db"
     )]
     database: String,
-    /// Print the stored record as JSON (with the trace when --trace is given).
+    /// Print the stored record's summary as JSON, and nothing else.
     #[arg(long)]
     json: bool,
+    /// With --json: the whole record, with its per-step trace and the maze.
+    #[arg(long, requires = "json")]
+    trace: bool,
     /// Write the match's HTML replay viewer to this file.
     #[arg(long)]
     html: Option<PathBuf>,
@@ -51,23 +53,30 @@ pub fn run(cmd: MatchCommand) -> anyhow::Result<()> {
 }
 
 async fn show(args: ShowArgs) -> anyhow::Result<()> {
-    let storage = Storage::open(&args.database)
-        .await
-        .with_context(|| format!("cannot open the database {}", args.database))?;
+    let storage = super::open_existing(&args.database).await?;
     let row = storage
         .get_match(args.id)
         .await?
         .with_context(|| format!("no match {} in {}", args.id, args.database))?;
     let maze_row = storage.get_maze(row.maze_id).await?;
     let (bot_name, maze_name) = (row.bot_name.clone(), row.maze_name.clone());
-    println!(
-        "match {}: {bot_name} v{} on {maze_name}, seed {}{}",
-        row.match_id,
-        row.version,
-        row.seed,
-        row.tournament_id
-            .map_or_else(String::new, |t| format!(", tournament {t}"))
-    );
+    if row.record.is_none() && args.json {
+        println!(
+            "{}",
+            serde_json::json!({"match_id": row.match_id, "status": row.status.to_string()})
+        );
+        return Ok(());
+    }
+    if !args.json {
+        println!(
+            "match {}: {bot_name} v{} on {maze_name}, seed {}{}",
+            row.match_id,
+            row.version,
+            row.seed,
+            row.tournament_id
+                .map_or_else(String::new, |t| format!(", tournament {t}"))
+        );
+    }
     if row.record.is_none() {
         println!("status: {} (not played yet)", row.status);
         return Ok(());
@@ -80,7 +89,9 @@ async fn show(args: ShowArgs) -> anyhow::Result<()> {
         .as_ref()
         .and_then(|m| mazefile::parse(m.layout.as_bytes()).ok());
     record.maze_layout = maze_row.map(|m| m.layout);
-    if args.json {
+    if args.json && args.trace {
+        println!("{}", serde_json::to_string(&record)?);
+    } else if args.json {
         println!("{}", serde_json::to_string(&record.summary())?);
     } else {
         print_record(&record);

@@ -94,6 +94,26 @@ pub fn run() -> anyhow::Result<()> {
     }
 }
 
+/// Opens the database at `url` for a command that reads what a server or a tournament
+/// stored: a SQLite file that does not exist is an error naming it (opening would
+/// create an empty one in the current folder).
+///
+/// # Errors
+/// As said, or the database cannot be opened.
+pub(crate) async fn open_existing(url: &str) -> anyhow::Result<crate::storage::Storage> {
+    if !url.starts_with("postgres") {
+        let file = url.trim_start_matches("sqlite://");
+        let file = file.split('?').next().unwrap_or(file);
+        anyhow::ensure!(
+            Path::new(file).exists(),
+            "no database at {file} (give --database, or set MAZEARENA_DATABASE)"
+        );
+    }
+    crate::storage::Storage::open(url)
+        .await
+        .with_context(|| format!("cannot open the database {url}"))
+}
+
 /// Reads and parses a maze file of either format, with the file name in the error.
 pub(crate) fn load_maze(path: &Path) -> anyhow::Result<Maze> {
     let bytes = read_capped(path, mazefile::MAX_FILE_BYTES)?;

@@ -3,8 +3,6 @@
 use anyhow::Context;
 use clap::Args;
 
-use crate::storage::Storage;
-
 /// Arguments of `mazearena prune`.
 #[derive(Debug, Args)]
 pub struct PruneArgs {
@@ -32,17 +30,7 @@ pub const DAY_MS: i64 = 24 * 60 * 60 * 1000;
 pub fn run(args: PruneArgs) -> anyhow::Result<()> {
     let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
     runtime.block_on(async {
-        if !args.database.starts_with("postgres") {
-            let file = args.database.trim_start_matches("sqlite://");
-            let file = file.split('?').next().unwrap_or(file);
-            anyhow::ensure!(
-                std::path::Path::new(file).exists(),
-                "no database at {file} (give --database)"
-            );
-        }
-        let storage = Storage::open(&args.database)
-            .await
-            .with_context(|| format!("cannot open the database {}", args.database))?;
+        let storage = super::open_existing(&args.database).await?;
         let before = crate::storage::now_ms() - i64::from(args.older_than_days) * DAY_MS;
         let (count, bytes) = storage.prune_practice_records(before).await?;
         println!(

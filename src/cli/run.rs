@@ -94,6 +94,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         ..Limits::default()
     };
     let sandbox = args.sandbox.open(&[], true)?;
+    if let Some(outside) = file_outside_the_folder(&args.bot, &dir) {
+        let message = outside_message(&args.bot, &dir, &outside);
+        if sandbox.level() == "full" {
+            anyhow::bail!("{message}");
+        }
+        eprintln!("warning: {message} (it works here only because the sandbox is off)");
+    }
     runner::botenv::check(&args.bot_env)?;
     let bot = BotSpec {
         command: args.bot.clone(),
@@ -160,6 +167,51 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         print_result(&record);
     }
     Ok(())
+}
+
+/// An argument of the bot's command (not its program) that names an existing file
+/// outside the bot's folder `dir` (and outside the system's folders): in the sandbox
+/// the bot sees only its folder, so it could not open it.
+fn file_outside_the_folder(command: &str, dir: &std::path::Path) -> Option<PathBuf> {
+    let words = shlex::split(command)?;
+    let dir = dir.canonicalize().ok()?;
+    words.iter().skip(1).find_map(|word| {
+        let path = dir.join(word);
+        let real = path.canonicalize().ok().filter(|p| p.is_file())?;
+        let system = ["/usr", "/lib", "/lib64", "/bin", "/sbin", "/etc"]
+            .iter()
+            .any(|s| real.starts_with(s));
+        (!real.starts_with(&dir) && !system).then_some(real)
+    })
+}
+
+/// What to say of a command naming `file` outside the bot's folder `dir`, with the flags
+/// that would work.
+fn outside_message(command: &str, dir: &std::path::Path, file: &std::path::Path) -> String {
+    let words = shlex::split(command).unwrap_or_default();
+    let name = file
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let folder = file.parent().unwrap_or(std::path::Path::new("/"));
+    let fix = if words.len() == 2 {
+        format!(
+            "give its folder: --bot-dir {} --bot '{} {name}'",
+            folder.display(),
+            words[0]
+        )
+    } else {
+        format!(
+            "copy it into the bot's folder, or run from a folder that holds it (--bot-dir {})",
+            folder.display()
+        )
+    };
+    format!(
+        "the bot's command names {}, which is outside the bot's folder {} (--bot-dir, by \
+         default the current folder): a bot sees only its own folder besides the system and \
+         its runtimes, so it cannot open that file; {fix}",
+        file.display(),
+        dir.display(),
+    )
 }
 
 /// `--verbose`: one line per exchange, as the bot saw it and answered.

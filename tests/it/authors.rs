@@ -247,6 +247,29 @@ fn a_tournament_says_why_a_bot_failed_and_match_show_shows_it() {
     let out = mazearena(&["match", "show", "999", "--database", &db]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no match 999"));
+    // --json prints JSON only; --trace adds the trace.
+    let summary = mazearena_json(&["match", "show", &id, "--database", &db, "--json"]);
+    assert_eq!(summary["status"], "crashed", "{summary}");
+    assert!(summary.get("trace").is_none());
+    let whole = mazearena_json(&["match", "show", &id, "--database", &db, "--json", "--trace"]);
+    assert_eq!(whole["status"], "crashed");
+    // (This match crashed at its first step: its trace is empty.)
+    assert!(
+        whole["maze_layout"].is_string() && whole["stderr_tail"].is_string(),
+        "{whole}"
+    );
+    let out = mazearena(&["match", "show", &id, "--database", &db, "--trace"]);
+    assert_eq!(out.status.code(), Some(2), "--trace needs --json");
+    // Without a database: an error naming it, and no empty database made.
+    let empty = tempfile::tempdir().unwrap();
+    let missing = format!("sqlite://{}", empty.path().join("mazearena.db").display());
+    let out = mazearena(&["match", "show", "1", "--database", &missing]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no database at"),
+        "{out:?}"
+    );
+    assert!(!empty.path().join("mazearena.db").exists());
 }
 
 #[test]

@@ -760,3 +760,38 @@ async fn an_owner_over_its_storage_cap_queues_nothing_until_pruned() {
     let (s, q) = queue().await;
     assert_eq!(s, 202, "{q}");
 }
+
+#[test]
+fn a_bot_file_outside_the_bots_folder_is_named_with_the_flags_that_work() {
+    let elsewhere = tempfile::tempdir().unwrap();
+    let robot = elsewhere.path().join("robot.py");
+    std::fs::copy(root().join("bots/python/simple_bot.py"), &robot).unwrap();
+    let bot = format!("python3 {}", robot.display());
+    let out = mazearena(&["run", "--maze", &classic_path(1), "--bot", &bot, "--json"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let real = robot.canonicalize().unwrap();
+    assert!(
+        stderr.contains(&format!(
+            "the bot's command names {}, which is outside the bot's folder",
+            real.display()
+        )),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(&format!(
+            "--bot-dir {} --bot 'python3 robot.py'",
+            real.parent().unwrap().display()
+        )),
+        "{stderr}"
+    );
+    if crate::support::sandbox().level() == "full" {
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "refused before the match: {out:?}"
+        );
+    }
+    // A file inside the folder, and a system file, are fine.
+    let v = run_json(&classic_path(1), "python3 bots/python/simple_bot.py");
+    assert_finished(&v);
+}
