@@ -365,3 +365,81 @@ async fn the_readme_competition_example_runs_as_written() {
     );
     assert!(again.contains("class-2027: Closed"), "{again}");
 }
+
+/// What the README's examples write in the checkout is ignored by git.
+#[test]
+fn what_the_readme_examples_write_is_ignored_by_git() {
+    let written = [
+        "match.html",
+        "match.json",
+        "bot.tar.gz",
+        "c-bot.tar.gz",
+        "ada-bot.tar.gz",
+        "mazearena.db",
+        "mazearena-data/bots/x",
+        "class-2027/mazes/public-1.txt",
+        "class-2027-export/competition.toml",
+        "bots/c/minimal_bot",
+    ];
+    for path in written {
+        let out = Command::new("git")
+            .args(["check-ignore", "--no-index", "-q", path])
+            .current_dir(root())
+            .status()
+            .expect("git runs");
+        assert!(out.success(), "{path} is not ignored by .gitignore");
+    }
+}
+
+/// The C kit's README: its build and run blocks work as written, in order, from the
+/// repository's root (on a copy of the kit).
+#[test]
+fn the_c_kits_readme_runs_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let repo = dir.path().join("repo");
+    std::fs::create_dir_all(repo.join("bots")).unwrap();
+    let copied = Command::new("cp")
+        .arg("-r")
+        .arg(root().join("bots/c"))
+        .arg(repo.join("bots/c"))
+        .status()
+        .unwrap();
+    assert!(copied.success());
+    let _ = Command::new("make")
+        .args(["-C", "bots/c", "clean"])
+        .current_dir(&repo)
+        .status();
+    std::os::unix::fs::symlink(root().join("mazes"), repo.join("mazes")).unwrap();
+    std::os::unix::fs::symlink(root().join("../shared"), dir.path().join("shared")).unwrap();
+    let text = std::fs::read_to_string(root().join("bots/c/README.md")).unwrap();
+    let mut blocks = Vec::new();
+    let mut block: Option<String> = None;
+    for line in text.lines() {
+        match (&mut block, line) {
+            (Some(b), "```") => {
+                blocks.push(std::mem::take(b));
+                block = None;
+            }
+            (Some(b), _) => {
+                b.push_str(line);
+                b.push('\n');
+            }
+            (None, "```sh") => block = Some(String::new()),
+            _ => {}
+        }
+    }
+    // Build, then run (the tournament block writes a database under /tmp: skipped).
+    let ran: Vec<&String> = blocks
+        .iter()
+        .filter(|b| !b.contains("tournament"))
+        .take(2)
+        .collect();
+    assert!(
+        ran[0].contains("make") && ran[1].contains("mazearena run"),
+        "{ran:?}"
+    );
+    for block in ran {
+        sh(&repo, block, &[]);
+    }
+    assert!(repo.join("bots/c/minimal_bot").exists());
+}
