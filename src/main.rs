@@ -18,7 +18,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            ExitCode::from(
+                e.downcast_ref::<mazearena::cli::ExitWith>()
+                    .map_or(2, |x| x.code),
+            )
         }
     }
 }

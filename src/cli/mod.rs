@@ -94,6 +94,18 @@ pub fn run() -> anyhow::Result<()> {
     }
 }
 
+/// A failure that ends the program with its own exit status instead of the usual 2
+/// (which says the command could not do its work): `doctor` exits 1 when the full
+/// sandbox cannot run here.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct ExitWith {
+    /// The exit status.
+    pub code: u8,
+    /// What to print.
+    pub message: String,
+}
+
 /// Opens the database at `url` for a command that reads what a server or a tournament
 /// stored: a SQLite file that does not exist is an error naming it (opening would
 /// create an empty one in the current folder).

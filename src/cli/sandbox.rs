@@ -109,7 +109,13 @@ pub fn doctor(args: DoctorArgs) -> anyhow::Result<()> {
             result.as_ref().map_or("none", Sandbox::level)
         );
     }
-    result.map(|_| ()).map_err(|e| anyhow::anyhow!("{e}"))
+    result.map(|_| ()).map_err(|e| {
+        super::ExitWith {
+            code: 1,
+            message: e.to_string(),
+        }
+        .into()
+    })
 }
 
 /// `mazearena sandbox-exec ARGS`: the jail step inside the sandbox (not for people).

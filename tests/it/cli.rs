@@ -784,14 +784,39 @@ fn a_bot_file_outside_the_bots_folder_is_named_with_the_flags_that_work() {
         )),
         "{stderr}"
     );
+    assert!(
+        stderr.starts_with("warning: "),
+        "said before the match: {stderr}"
+    );
     if crate::support::sandbox().level() == "full" {
-        assert_eq!(
-            out.status.code(),
-            Some(2),
-            "refused before the match: {out:?}"
-        );
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["status"], "crashed", "it cannot open it: {v}");
     }
     // A file inside the folder, and a system file, are fine.
     let v = run_json(&classic_path(1), "python3 bots/python/simple_bot.py");
     assert_finished(&v);
+}
+
+#[test]
+fn doctor_exits_1_when_the_full_sandbox_cannot_run_and_0_when_it_can() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
+        .arg("doctor")
+        .env("PATH", "/nonexistent")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("bubblewrap"),
+        "{out:?}"
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("sandbox level: none"));
+    if crate::support::sandbox().level() == "full" {
+        let out = mazearena(&["doctor"]);
+        assert_eq!(out.status.code(), Some(0), "{out:?}");
+    }
+    // A usage error stays 2.
+    assert_eq!(
+        mazearena(&["doctor", "--no-such-flag"]).status.code(),
+        Some(2)
+    );
 }
