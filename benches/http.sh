@@ -29,7 +29,7 @@ BIN=target/release/mazearena
 DIR=target/bench
 PORT=18182
 BASE=http://127.0.0.1:$PORT
-ADMIN=bench
+ADMIN=bench-admin-token-0123456789
 
 log() { echo "http.sh: $*" >&2; }
 die() {

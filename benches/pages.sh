@@ -19,7 +19,7 @@ mkdir -p "$DIR"
 [ -x "$BIN" ] || cargo build --release --locked
 [ -f "$DB" ] || python3 benches/fill_db.py "$DB" "$N" --bin "$BIN"
 
-MAZEARENA_ADMIN_TOKEN=bench "$BIN" serve --bind 127.0.0.1:$PORT \
+MAZEARENA_ADMIN_TOKEN=bench-admin-token-0123456789 "$BIN" serve --bind 127.0.0.1:$PORT \
   --database "sqlite://$DB" --data-dir "$DIR/data" --jobs 1 >"$DIR/pages-server.log" 2>&1 &
 SERVER=$!
 trap 'kill $SERVER 2>/dev/null || true' EXIT

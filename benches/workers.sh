@@ -36,7 +36,7 @@ psql -q "$db" -c "create extension pg_stat_statements"
 
 port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 api=http://127.0.0.1:$port
-MAZEARENA_ADMIN_TOKEN=bench ./target/release/mazearena serve --jobs 0 --bind "127.0.0.1:$port" \
+MAZEARENA_ADMIN_TOKEN=bench-admin-token-0123456789 ./target/release/mazearena serve --jobs 0 --bind "127.0.0.1:$port" \
   --database "$db" --data-dir "$tmp/data" >"$tmp/api.log" 2>&1 &
 for _ in $(seq 100); do curl -fs "$api/healthz" >/dev/null && break; sleep 0.1; done
 
@@ -65,7 +65,7 @@ api, bot, repeats = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 mazes = [m["maze_id"] for m in json.load(urllib.request.urlopen(api + "/api/mazes"))]
 req = urllib.request.Request(api + "/api/tournaments", method="POST",
     data=json.dumps({"name": "bench", "bot_ids": [bot], "maze_ids": mazes, "repeats": repeats}).encode(),
-    headers={"Content-Type": "application/json", "Authorization": "Bearer bench"})
+    headers={"Content-Type": "application/json", "Authorization": "Bearer bench-admin-token-0123456789"})
 t = json.load(urllib.request.urlopen(req))
 print(t["tournament_id"], t["total"])
 PY

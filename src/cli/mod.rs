@@ -94,6 +94,12 @@ pub fn run() -> anyhow::Result<()> {
     }
 }
 
+/// `n` and the noun that goes with it: "1 match worker", "2 match workers".
+pub(crate) fn count(n: impl Into<i64>, one: &str, many: &str) -> String {
+    let n = n.into();
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 /// A failure that ends the program with its own exit status instead of the usual 2
 /// (which says the command could not do its work): `doctor` exits 1 when the full
 /// sandbox cannot run here.

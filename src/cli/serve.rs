@@ -229,14 +229,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         Backend::Sqlite => prepare(&storage, &data_dir).await?,
     }
 
-    let admin_token = match args.admin_token.filter(|t| !t.trim().is_empty()) {
-        Some(t) => t,
-        None => {
-            let t = auth::new_token().map_err(|e| anyhow::anyhow!("{e}"))?;
-            eprintln!("admin token (generated; set MAZEARENA_ADMIN_TOKEN to choose one): {t}");
-            t
-        }
-    };
+    let admin_token = admin_token(args.admin_token.as_deref(), &data_dir)?;
     let jobs = args.pool.jobs(0);
     let metrics = Metrics::new();
     let wake = Arc::new(Notify::new());
@@ -262,7 +255,8 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot listen on {}", args.bind))?;
     let addr = listener.local_addr()?;
     println!(
-        "mazearena listening on http://{addr} ({jobs} match workers, sandbox {})",
+        "mazearena listening on http://{addr} ({}, sandbox {})",
+        super::count(jobs as i64, "match worker", "match workers"),
         state.settings.sandbox_level
     );
     use std::io::Write;
@@ -406,6 +400,48 @@ pub(super) async fn finish(
 /// The server's start-up work on the database: re-queue what an earlier server left
 /// running, load the default mazes into an empty database, move an earlier release's
 /// data folder in.
+/// The shortest admin token accepted.
+pub const MIN_ADMIN_TOKEN_CHARS: usize = 16;
+
+/// The admin token: the one given (at least [`MIN_ADMIN_TOKEN_CHARS`] characters), or
+/// the one kept in the data folder (`admin-token`, readable by its owner only), made and
+/// printed on the first start.
+fn admin_token(given: Option<&str>, data_dir: &std::path::Path) -> anyhow::Result<String> {
+    use std::io::Write;
+    use std::os::unix::fs::OpenOptionsExt;
+    if let Some(t) = given.map(str::trim).filter(|t| !t.is_empty()) {
+        anyhow::ensure!(
+            t.chars().count() >= MIN_ADMIN_TOKEN_CHARS,
+            "the admin token is too short ({} characters): use at least {MIN_ADMIN_TOKEN_CHARS}, \
+             e.g. MAZEARENA_ADMIN_TOKEN=$(openssl rand -hex 32)",
+            t.chars().count()
+        );
+        return Ok(t.to_string());
+    }
+    let file = data_dir.join("admin-token");
+    if let Ok(kept) = std::fs::read_to_string(&file) {
+        let kept = kept.trim().to_string();
+        if kept.chars().count() >= MIN_ADMIN_TOKEN_CHARS {
+            eprintln!("admin token: the one kept in {}", file.display());
+            return Ok(kept);
+        }
+    }
+    let t = auth::new_token().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut out = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .mode(0o600)
+        .open(&file)
+        .with_context(|| format!("cannot write {}", file.display()))?;
+    writeln!(out, "{t}").with_context(|| format!("cannot write {}", file.display()))?;
+    eprintln!(
+        "admin token (generated, kept in {} for the next start; set MAZEARENA_ADMIN_TOKEN to choose one): {t}",
+        file.display()
+    );
+    Ok(t)
+}
+
 async fn prepare(storage: &Storage, data_dir: &std::path::Path) -> anyhow::Result<()> {
     let requeued = storage.requeue_expired().await?;
     if requeued > 0 {

@@ -188,12 +188,12 @@ async fn play(
     let jobs = args.jobs.unwrap_or(cores).clamp(1, cores);
     if !args.json {
         eprintln!(
-            "tournament {}: {} bots x {} mazes x {} repeats = {} matches, {jobs} at a time",
+            "tournament {}: {} x {} x {} = {}, {jobs} at a time",
             t.tournament_id,
-            bots.len(),
-            maze_ids.len(),
-            args.repeats,
-            t.total
+            super::count(bots.len() as i64, "bot", "bots"),
+            super::count(maze_ids.len() as i64, "maze", "mazes"),
+            super::count(args.repeats, "repeat", "repeats"),
+            super::count(t.total, "match", "matches"),
         );
     }
     let bar = if std::io::stderr().is_terminal() && !args.json {

@@ -1699,3 +1699,142 @@ async fn an_entrants_key_acts_for_no_other_entrant_and_sets_nothing_of_the_serve
         .await;
     assert_eq!(s, 202);
 }
+
+#[test]
+fn a_short_admin_token_is_refused_and_a_generated_one_is_kept_for_the_next_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let serve = |token: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"));
+        cmd.args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--jobs",
+            "0",
+            "--database",
+        ])
+        .arg(format!(
+            "sqlite://{}",
+            dir.path().join("db.sqlite").display()
+        ))
+        .arg("--data-dir")
+        .arg(dir.path().join("data"))
+        .env("MAZEARENA_SANDBOX", "none")
+        .env_remove("MAZEARENA_ADMIN_TOKEN")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+        if let Some(t) = token {
+            cmd.env("MAZEARENA_ADMIN_TOKEN", t);
+        }
+        cmd.spawn().unwrap()
+    };
+    let out = serve(Some("change-me")).wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("the admin token is too short (9 characters)"),
+        "{out:?}"
+    );
+    // Generated on the first start, printed, kept (owner-only) and reused.
+    let token_line = |mut child: std::process::Child| {
+        use std::io::BufRead;
+        let mut reader = std::io::BufReader::new(child.stderr.take().unwrap());
+        let mut line = String::new();
+        while !line.contains("admin token") {
+            line.clear();
+            assert!(
+                reader.read_line(&mut line).unwrap() > 0,
+                "no admin token line"
+            );
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+        line
+    };
+    let said = token_line(serve(None));
+    let kept = std::fs::read_to_string(dir.path().join("data/admin-token")).unwrap();
+    assert!(
+        said.contains("generated") && said.contains(kept.trim()),
+        "{said}"
+    );
+    use std::os::unix::fs::PermissionsExt;
+    let mode = std::fs::metadata(dir.path().join("data/admin-token"))
+        .unwrap()
+        .permissions()
+        .mode();
+    assert_eq!(mode & 0o777, 0o600);
+    let said = token_line(serve(None));
+    assert!(
+        said.contains("the one kept in") && !said.contains(kept.trim()),
+        "{said}"
+    );
+}
+
+#[test]
+fn a_servers_log_written_to_a_file_is_plain_text() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("server.log");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
+        .args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--jobs",
+            "1",
+            "--database",
+        ])
+        .arg(format!(
+            "sqlite://{}",
+            dir.path().join("db.sqlite").display()
+        ))
+        .arg("--data-dir")
+        .arg(dir.path().join("data"))
+        .env("MAZEARENA_SANDBOX", "none")
+        .env("MAZEARENA_ADMIN_TOKEN", ADMIN)
+        .env("RUST_LOG", "mazearena=info")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    use std::io::BufRead;
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert!(line.contains("(1 match worker, sandbox none)"), "{line}");
+    // Once it answers, its signal handler is in place.
+    let addr = line
+        .split("http://")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .to_string();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    loop {
+        use std::io::{Read, Write};
+        let mut answer = String::new();
+        if let Ok(mut s) = std::net::TcpStream::connect(&addr) {
+            let _ = s.write_all(b"GET /healthz HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+            let _ = s.read_to_string(&mut answer);
+        }
+        if answer.starts_with("HTTP/1.1 200") {
+            break;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the server did not answer"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    child.wait().unwrap();
+    let text = std::fs::read_to_string(&log).unwrap();
+    assert!(text.contains("shutting down"), "{text}");
+    assert!(!text.contains('\u{1b}'), "colour codes in a file: {text:?}");
+}
