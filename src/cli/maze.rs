@@ -121,15 +121,24 @@ pub fn run(cmd: MazeCommand) -> anyhow::Result<()> {
                 )
             })?;
             println!("Fewest run-1 steps: {}", solution.steps);
-            for (i, (action, cell)) in solution
+            for (i, (action, cells)) in solution
                 .actions
                 .iter()
-                .zip(solution.path.iter().skip(1))
+                .zip(solution.path.windows(2))
                 .enumerate()
             {
                 if let crate::engine::Action::Move { rotation, movement } = action {
+                    let (from, to) = (cells[0], cells[1]);
+                    let moved = from.x.abs_diff(to.x) + from.y.abs_diff(to.y);
+                    // A move asked longer than the way is open stops at the wall (the
+                    // rules): say so, so that it does not read as a wrong count.
+                    let stopped = if u64::from(moved) != movement.unsigned_abs() {
+                        format!("  (a wall stops it after {moved})")
+                    } else {
+                        String::new()
+                    };
                     println!(
-                        "{:>3}: rotation {rotation:>3}, movement {movement:>2} -> {cell}",
+                        "{:>3}: rotation {rotation:>3}, movement {movement:>2} -> {to}{stopped}",
                         i + 1
                     );
                 }

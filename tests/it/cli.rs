@@ -417,10 +417,16 @@ fn solve_gives_the_reference_figures() {
         assert_eq!(v["actions"].as_array().unwrap().len(), want as usize);
     }
     let out = mazearena(&["maze", "solve", &classic_path(1)]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("Fewest run-1 steps: 17"));
+    // A move asked longer than the way is open stops at a wall, and says so.
     assert!(
-        String::from_utf8(out.stdout)
-            .unwrap()
-            .contains("Fewest run-1 steps: 17")
+        text.contains("  3: rotation  90, movement  3 -> (1, 0)  (a wall stops it after 2)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("  2: rotation  90, movement  1 -> (1, 2)\n"),
+        "{text}"
     );
 }
 
