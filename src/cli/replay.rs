@@ -64,10 +64,12 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let output = args
         .output
         .unwrap_or_else(|| args.replay.with_extension("html"));
-    let title = args
-        .replay
-        .file_stem()
-        .map_or_else(|| "replay".into(), |s| s.to_string_lossy().into_owned());
+    // The title `run` wrote (the bot, the maze, the seed), else the file's name.
+    let title = record.title.clone().unwrap_or_else(|| {
+        args.replay
+            .file_stem()
+            .map_or_else(|| "replay".into(), |s| s.to_string_lossy().into_owned())
+    });
     write_html(&record, Some(&maze), title, &output)?;
     eprintln!("wrote {}", output.display());
     Ok(())

@@ -147,20 +147,21 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     ));
     let mut record = record;
     record.maze_layout = Some(crate::engine::mazefile::numeric::write(&maze));
+    let title = format!(
+        "{} on {} (seed {})",
+        args.bot,
+        args.maze
+            .file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned()),
+        args.seed
+    );
+    record.title = Some(title.clone());
     if let Some(path) = &args.replay {
         let text = serde_json::to_string(&record).context("cannot encode the match record")?;
         std::fs::write(path, text)
             .with_context(|| format!("cannot write the replay to {}", path.display()))?;
     }
     if let Some(path) = &args.html {
-        let title = format!(
-            "{} on {} (seed {})",
-            args.bot,
-            args.maze
-                .file_stem()
-                .map_or_else(String::new, |s| s.to_string_lossy().into_owned()),
-            args.seed
-        );
         super::replay::write_html(&record, Some(&maze), title, path)?;
     }
     if json {

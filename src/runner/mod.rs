@@ -301,6 +301,7 @@ fn new_record(maze: &Maze, seed: u64, limits: &Limits, sandbox: &Sandbox) -> Mat
         core: affinity::pinned_core(),
         notices: Vec::new(),
         maze_layout: None,
+        title: None,
         trace: Vec::new(),
     }
 }

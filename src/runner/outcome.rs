@@ -297,6 +297,10 @@ pub struct MatchRecord {
     /// watch the match (written by `mazearena run --replay`; the server keeps it apart).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub maze_layout: Option<String>,
+    /// What was played, for people: the bot, the maze and the seed (written by
+    /// `mazearena run --replay`, shown by `mazearena replay`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub title: Option<String>,
     /// Every step, in order (left out of summaries).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub trace: Vec<TraceStep>,

@@ -168,6 +168,7 @@ pub fn encode(record: &MatchRecord, maze: &Maze) -> Result<(i64, Vec<u8>), Strin
     } else {
         let whole = MatchRecord {
             maze_layout: None,
+            title: None,
             ..record.clone()
         };
         (
@@ -274,6 +275,7 @@ fn complete(stored: Stored, summary: MatchSummary, maze: &Maze) -> Result<MatchR
         core: stored.core,
         notices: stored.notices.into_owned(),
         maze_layout: None,
+        title: None,
         trace,
     })
 }
@@ -399,6 +401,7 @@ mod tests {
             core: Some(1),
             notices: Vec::new(),
             maze_layout: None,
+            title: None,
             trace,
         }
     }

@@ -174,6 +174,13 @@ fn the_readme_viewer_example_runs_as_written() {
     }
     let html = std::fs::read_to_string(dir.path().join("match.html")).unwrap();
     assert!(html.contains("id=\"replay-data\"") && html.contains("\"maze_layout\""));
+    // The viewer made from the replay file is titled with the bot, the maze and the seed.
+    let again = std::fs::read_to_string(dir.path().join("match.html")).unwrap();
+    assert!(
+        again.contains("<title>python3 simple_bot.py on gen-12-s1 (seed 0)"),
+        "{}",
+        &again[..again.len().min(600)]
+    );
 }
 
 /// Starts one long-running README command in bash (`mazearena` being the binary under
