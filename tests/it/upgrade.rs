@@ -305,6 +305,9 @@ async fn a_database_of_release_0_2_0_keeps_its_ranking_as_the_default_competitio
             assert_eq!(line[field], old[field], "{field}: {board}");
         }
     }
+    // The ranking's ratio column is "-" over hidden mazes, and the page says why.
+    let (_, home) = server.get_text("/").await;
+    assert!(home.contains("where hidden mazes are counted"), "{home}");
     let (_, page) = server.get_text("/competitions/ranking").await;
     assert!(page.contains("alpha") && page.contains("beta"), "{page}");
     drop(server);

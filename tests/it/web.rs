@@ -93,6 +93,25 @@ async fn drive_viewer(b: &Browser, trace: &[Value], what: &str) {
         "{what}: the debug text"
     );
     b.screenshot(&format!("{what}-step8-debug")).await;
+    // Not every layer at once: the visits heat map and the optimal route start hidden
+    // (one click shows each), the trail, run-1 path, sensors and debug drawing shown.
+    for hidden in ["#heat-layer", "#optimal-layer"] {
+        assert_eq!(
+            b.attr(hidden, "display").await.as_deref(),
+            Some("none"),
+            "{what}: {hidden} starts hidden"
+        );
+    }
+    assert_ne!(
+        b.attr("#trail-layer", "display").await.as_deref(),
+        Some("none")
+    );
+    b.click("#layer-heat").await;
+    assert_ne!(
+        b.attr("#heat-layer", "display").await.as_deref(),
+        Some("none")
+    );
+    b.click("#layer-heat").await;
     b.click("#layer-debug").await;
     assert_eq!(
         b.attr("#debug-layer", "display").await.as_deref(),

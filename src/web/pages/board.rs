@@ -135,6 +135,9 @@ pub(super) fn standings_table(s: &StandingsSection) -> Markup {
                     }
                 }
             }
+            @if s.rows.iter().any(|r| r.mean_ratio.is_none()) {
+                p.muted.ratio-note { "score / optimum: \"-\" where hidden mazes are counted (over a hidden maze the ratio would give its optimum away)." }
+            }
         }
     }
 }
