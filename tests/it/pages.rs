@@ -193,6 +193,11 @@ async fn match_lists_filter_and_page() {
         )) && html.contains("3 matches"),
         "{html}"
     );
+    // Each match says when it was queued; names do not wrap.
+    assert!(
+        html.contains("<th>queued</th>") && html.contains("<td class=\"time\">"),
+        "{html}"
+    );
     let (_, ts) = server.get("/api/tournaments", None).await;
     assert_eq!(ts["total"], 0);
 }

@@ -178,15 +178,16 @@ pub fn match_table(lines: &[MatchLine]) -> Markup {
         @if lines.is_empty() { p.muted { "No match." } } @else {
             table.data.matches {
                 thead { tr {
-                    th.num { "match" } th { "bot" } th { "maze" } th.num { "seed" } th { "status" }
+                    th.num { "match" } th { "queued" } th { "bot" } th { "maze" } th.num { "seed" } th { "status" }
                     th.num { "score" } th.num { "run 0" } th.num { "run 1" } th { "reason" }
                 } }
                 tbody {
                     @for l in lines {
                         tr {
                             td.num { a href={ "/matches/" (l.row.match_id) } { (l.row.match_id) } }
-                            td { a href={ "/bots/" (l.row.bot_id) } { (l.row.bot_name) } span.muted { " v" (l.row.version) } }
-                            td { a href={ "/mazes/" (l.row.maze_id) } { (l.row.maze_name) } }
+                            td.time { (time(l.row.created_at)) }
+                            td.name { a href={ "/bots/" (l.row.bot_id) } { (l.row.bot_name) } span.muted { " v" (l.row.version) } }
+                            td.name { a href={ "/mazes/" (l.row.maze_id) } { (l.row.maze_name) } }
                             td.num { (l.row.seed) }
                             td { (status(l.row.status.as_str())) }
                             td.num { @if l.row.status == "finished" { (score(l.row.score)) } @else { span.muted { "-" } } }
