@@ -258,6 +258,17 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     b.open(&format!("{}/matches/{m}", server.base), "#robot")
         .await;
     b.screenshot("match-page").await;
+    // The page's heading and cards say what the match is; the viewer's own header, the
+    // same again, is not shown (the offline file shows it: it has nothing else).
+    let header = b
+        .client
+        .find(fantoccini::Locator::Css("#viewer .mv-header"))
+        .await
+        .unwrap();
+    assert!(
+        !header.is_displayed().await.unwrap(),
+        "the header is shown twice"
+    );
     drive_viewer(&b, &trace, "match-page").await;
 
     // A bot's stderr is its owner's, on a public maze too: the page and the anonymous
@@ -355,6 +366,15 @@ async fn the_offline_replay_file_shows_the_same() {
     b.open(&format!("file://{}", html.display()), "#robot")
         .await;
     b.screenshot("offline").await;
+    let header = b
+        .client
+        .find(fantoccini::Locator::Css("#viewer .mv-header"))
+        .await
+        .unwrap();
+    assert!(
+        header.is_displayed().await.unwrap(),
+        "the offline file has its header"
+    );
     drive_viewer(&b, &trace, "offline").await;
     b.quit().await;
 }
