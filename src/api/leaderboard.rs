@@ -82,10 +82,8 @@ pub(super) async fn competition_standings_elsewhere(
 ) -> ApiResult<ApiError> {
     let name = state
         .storage
-        .list_competitions()
+        .get_competition_by_id(competition_id)
         .await?
-        .into_iter()
-        .find(|c| c.competition_id == competition_id)
         .map_or_else(|| competition_id.to_string(), |c| c.name);
     Ok(ApiError::Conflict(format!(
         "tournament {id} ranks for competition {name}: its standings are on \
@@ -122,15 +120,11 @@ pub(super) async fn settled_for_caller(
         .filter(|r| !pending.contains(&(r.bot_id, r.version)))
         .collect();
     // Ranks again, ties (same mean score and finish rate) sharing one.
-    for i in 0..kept.len() {
-        kept[i].rank = if i > 0
-            && kept[i].mean_score == kept[i - 1].mean_score
-            && kept[i].finish_rate == kept[i - 1].finish_rate
-        {
-            kept[i - 1].rank
-        } else {
-            i as i64 + 1
-        };
+    let ranks = crate::competition::selection::shared_ranks(&kept, |a, b| {
+        a.mean_score == b.mean_score && a.finish_rate == b.finish_rate
+    });
+    for (row, rank) in kept.iter_mut().zip(ranks) {
+        row.rank = rank;
     }
     Ok(for_caller(kept, caller))
 }

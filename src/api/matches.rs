@@ -200,12 +200,9 @@ async fn create_match(
         crate::registry::competitions::check_practice(&state.storage, bot.bot_id, maze.maze_id, now)
             .await?
     {
-        let wait_ms = quota
-            .next_at
-            .map_or(crate::competition::DAY_MS, |t| t.0 - now);
         return Err(ApiError::TooManyRequests {
             message,
-            retry_after_secs: (wait_ms.max(0) as u64).div_ceil(1000).max(1),
+            retry_after_secs: quota.retry_after_secs(now),
         });
     }
     if !caller.is_admin() {

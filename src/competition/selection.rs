@@ -83,6 +83,21 @@ pub fn select(rule: Rule, max_selected: usize, candidates: &[Candidate]) -> Vec<
     picked.iter().map(|c| c.bot_version_id).collect()
 }
 
+/// The ranks of `items`, best first: 1, 2, ..., except that an item `tied` to the one
+/// before it shares its rank ("1, 2, 2, 4").
+pub fn shared_ranks<T>(items: &[T], tied: impl Fn(&T, &T) -> bool) -> Vec<i64> {
+    let mut ranks: Vec<i64> = Vec::with_capacity(items.len());
+    for i in 0..items.len() {
+        let rank = if i > 0 && tied(&items[i - 1], &items[i]) {
+            ranks[i - 1]
+        } else {
+            i as i64 + 1
+        };
+        ranks.push(rank);
+    }
+    ranks
+}
+
 /// A selected version's numbers on the set that decides.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VersionScore {
@@ -123,15 +138,8 @@ pub fn rank_entrants(scores: &[VersionScore]) -> Vec<(i64, VersionScore)> {
         }
     }
     best.sort_by(|a, b| better(a, b).then(a.entrant_id.cmp(&b.entrant_id)));
-    let mut ranked: Vec<(i64, VersionScore)> = Vec::with_capacity(best.len());
-    for (i, s) in best.into_iter().enumerate() {
-        let rank = match ranked.last() {
-            Some((r, prev)) if better(prev, &s).is_eq() => *r,
-            _ => i as i64 + 1,
-        };
-        ranked.push((rank, s));
-    }
-    ranked
+    let ranks = shared_ranks(&best, |a, b| better(a, b).is_eq());
+    ranks.into_iter().zip(best).collect()
 }
 
 #[cfg(test)]

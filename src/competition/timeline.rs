@@ -31,6 +31,18 @@ pub enum Phase {
     Closed,
 }
 
+impl Phase {
+    /// The word the API uses.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::Upcoming => "upcoming",
+            Phase::Open => "open",
+            Phase::Frozen => "frozen",
+            Phase::Closed => "closed",
+        }
+    }
+}
+
 impl Timeline {
     /// When the public leaderboard freezes, if it does.
     pub fn frozen_from(&self) -> Option<i64> {
@@ -98,6 +110,13 @@ impl Quota {
             next_at,
             message,
         }
+    }
+
+    /// Seconds until one more is allowed, from `now` (a day when none ever is): the
+    /// `Retry-After` of a refusal.
+    pub fn retry_after_secs(&self, now: i64) -> u64 {
+        let wait_ms = self.next_at.map_or(DAY_MS, |t| t.0 - now);
+        (wait_ms.max(0) as u64).div_ceil(1000).max(1)
     }
 
     /// Whether one more is allowed now.

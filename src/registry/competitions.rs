@@ -344,13 +344,8 @@ pub async fn check_upload(
                 Timestamp(c.closes_at.unwrap_or(0)).rfc3339()
             ))));
         }
-        let entrant = storage
-            .competition_entries(c.competition_id)
-            .await?
-            .into_iter()
-            .find(|e| e.bot_id == bot_id);
-        if let Some(e) = entrant {
-            let quota = version_quota(storage, &c, e.entrant_id, now).await?;
+        if let Some(entrant) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
+            let quota = version_quota(storage, &c, entrant, now).await?;
             if !quota.allows_one_more() {
                 return Ok(Some(UploadRefusal::Quota(
                     format!("competition {}: {}", c.name, quota.message),
@@ -380,13 +375,11 @@ pub async fn check_practice(
             .await?
             .iter()
             .any(|m| m.maze_id == maze_id && m.maze_set == "practice");
-        let entry = storage
-            .competition_entries(c.competition_id)
-            .await?
-            .into_iter()
-            .find(|e| e.bot_id == bot_id);
-        if let (true, Some(e)) = (practice, entry) {
-            let quota = practice_quota(storage, &c, e.entrant_id, now).await?;
+        if !practice {
+            continue;
+        }
+        if let Some(entrant) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
+            let quota = practice_quota(storage, &c, entrant, now).await?;
             if !quota.allows_one_more() {
                 return Ok(Some((
                     format!("competition {}: {}", c.name, quota.message),
@@ -502,12 +495,11 @@ fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
             .then(b.finish_rate.total_cmp(&a.finish_rate))
             .then(a.bot_name.cmp(&b.bot_name))
     });
+    let ranks = selection::shared_ranks(&latest, |a, b| {
+        a.mean_score == b.mean_score && a.finish_rate == b.finish_rate
+    });
     let mut lines: Vec<BoardLine> = Vec::with_capacity(latest.len());
-    for (i, r) in latest.into_iter().enumerate() {
-        let rank = match lines.last() {
-            Some(p) if p.mean_score == r.mean_score && p.finish_rate == r.finish_rate => p.rank,
-            _ => i as i64 + 1,
-        };
+    for (rank, r) in ranks.into_iter().zip(latest) {
         lines.push(BoardLine {
             rank,
             entrant: r.entrant_name.unwrap_or_default(),
@@ -551,12 +543,7 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
             .iter()
             .any(|(c, _)| c.competition_id == competition_id)
         {
-            let Some(c) = storage
-                .list_competitions()
-                .await?
-                .into_iter()
-                .find(|c| c.competition_id == competition_id)
-            else {
+            let Some(c) = storage.get_competition_by_id(competition_id).await? else {
                 continue;
             };
             let mazes = storage.competition_mazes(competition_id).await?;
@@ -568,15 +555,13 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
         else {
             continue;
         };
-        let set = |name: &str| -> Vec<i64> {
-            mazes
-                .iter()
-                .filter(|m| m.maze_set == name)
-                .map(|m| m.maze_id)
-                .collect()
-        };
         if storage
-            .rank_version(c, version_id, &set("public"), &set("private"))
+            .rank_version(
+                c,
+                version_id,
+                &in_set(mazes, "public"),
+                &in_set(mazes, "private"),
+            )
             .await?
         {
             report.ranked += 1;
@@ -596,13 +581,8 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
         match c.state.as_deref() {
             None => {
                 let selected = final_selection(storage, &c).await?;
-                let private: Vec<i64> = storage
-                    .competition_mazes(c.competition_id)
-                    .await?
-                    .into_iter()
-                    .filter(|m| m.maze_set == "private")
-                    .map(|m| m.maze_id)
-                    .collect();
+                let mazes = storage.competition_mazes(c.competition_id).await?;
+                let private = in_set(&mazes, "private");
                 if storage.start_final(&c, &selected, &private).await? {
                     report.selected += 1;
                 }
@@ -612,6 +592,15 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
         }
     }
     Ok(report)
+}
+
+/// The ids of `mazes` in set `set` (`practice`, `public`, `private`), in order.
+fn in_set(mazes: &[CompetitionMaze], set: &str) -> Vec<i64> {
+    mazes
+        .iter()
+        .filter(|m| m.maze_set == set)
+        .map(|m| m.maze_id)
+        .collect()
 }
 
 /// The versions each entrant has counting at the end, by the competition's rule.
@@ -663,14 +652,11 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
     };
     let kept = storage.competition_board(t, false).await?;
     let counted = storage.competition_board(t, true).await?;
-    let mut chosen = std::collections::HashSet::new();
-    for e in storage.competition_entries(c.competition_id).await? {
-        for s in storage.submissions(c, e.entrant_id).await? {
-            if s.selected {
-                chosen.insert(s.bot_version_id);
-            }
-        }
-    }
+    let chosen: std::collections::HashSet<i64> = storage
+        .selected_versions(c.competition_id)
+        .await?
+        .into_iter()
+        .collect();
     let scores: Vec<VersionScore> = kept
         .iter()
         .filter(|r| chosen.contains(&r.bot_version_id))
@@ -685,11 +671,14 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             })
         })
         .collect();
-    let mazes: Vec<serde_json::Value> = storage
+    let private: Vec<CompetitionMaze> = storage
         .competition_mazes(c.competition_id)
         .await?
         .into_iter()
         .filter(|m| m.maze_set == "private")
+        .collect();
+    let mazes: Vec<serde_json::Value> = private
+        .iter()
         .map(|m| serde_json::json!({"name": m.name, "hash": m.hash}))
         .collect();
     let seeds: Vec<serde_json::Value> = storage
@@ -778,11 +767,10 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
     }
     let mut reveal = Vec::new();
     if c.reveal_private_mazes {
-        for m in storage.competition_mazes(c.competition_id).await? {
-            if m.maze_set == "private"
-                && !storage
-                    .maze_in_other_live_competition(m.maze_id, c.competition_id)
-                    .await?
+        for m in &private {
+            if !storage
+                .maze_in_other_live_competition(m.maze_id, c.competition_id)
+                .await?
             {
                 reveal.push(m.maze_id);
             }

@@ -337,6 +337,22 @@ impl Storage {
         .await?)
     }
 
+    /// The competition `competition_id`.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn get_competition_by_id(
+        &self,
+        competition_id: i64,
+    ) -> Result<Option<CompetitionRow>> {
+        Ok(sqlx::query_as(&format!(
+            "select {COMPETITION_COLUMNS} from competition where competition_id = $1"
+        ))
+        .bind(competition_id)
+        .fetch_optional(self.pool())
+        .await?)
+    }
+
     /// Every competition, the default one first, then newest first.
     ///
     /// # Errors
@@ -510,6 +526,33 @@ impl Storage {
                 .await?
                 .flatten(),
         )
+    }
+
+    /// The entrant that entered bot `bot_id` in competition `competition_id`, if it is.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn entrant_of_entry(&self, competition_id: i64, bot_id: i64) -> Result<Option<i64>> {
+        Ok(sqlx::query_scalar(
+            "select entrant_id from competition_entry where competition_id = $1 and bot_id = $2",
+        )
+        .bind(competition_id)
+        .bind(bot_id)
+        .fetch_optional(self.pool())
+        .await?)
+    }
+
+    /// The versions the final selection of a competition took.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn selected_versions(&self, competition_id: i64) -> Result<Vec<i64>> {
+        Ok(sqlx::query_scalar(
+            "select bot_version_id from competition_version where competition_id = $1 and selected = 1",
+        )
+        .bind(competition_id)
+        .fetch_all(self.pool())
+        .await?)
     }
 
     /// The bots entered in a competition, by entrant name.
@@ -798,11 +841,18 @@ impl Storage {
         .await?)
     }
 
-    /// Unseals a competition's private set (its close has passed).
+    /// Unseals a competition's private set (its close has passed). Reads first, so that
+    /// the clock's every tick after the close writes nothing once it is done.
     ///
     /// # Errors
     /// Database failures.
     pub async fn unseal_private_set(&self, c: &CompetitionRow) -> Result<()> {
+        let Some(t) = c.private_tournament_id else {
+            return Ok(());
+        };
+        if !self.get_tournament(t).await?.is_some_and(|t| t.sealed) {
+            return Ok(());
+        }
         let _turn = self.write_turn().await;
         sqlx::query("update tournament set sealed = 0 where tournament_id = $1 and sealed = 1")
             .bind(c.private_tournament_id)

@@ -154,6 +154,45 @@ async fn play_a_competition(server: &TestServer) {
         assert_eq!(s, 201, "{v}");
         teams.push((key, bot));
     }
+    // An entrant's key manages no competition; an organiser's key is no admin token
+    // (no organiser made, no registration mode, no paused bot resumed) and owns no bot.
+    let entrant = Some(teams[0].0.clone());
+    let (s, v) = call(
+        Method::PATCH,
+        "/api/competitions/class-2027".into(),
+        Some(json!({"title": "mine"})),
+        entrant,
+    )
+    .await;
+    assert_eq!(s, 403, "{v}");
+    let org = Some(organiser.clone());
+    for (method, path, body) in [
+        (
+            Method::POST,
+            "/api/organisers".to_string(),
+            json!({"name": "another"}),
+        ),
+        (
+            Method::PUT,
+            "/api/registration".to_string(),
+            json!({"mode": "closed"}),
+        ),
+        (
+            Method::POST,
+            format!("/api/bots/{}/resume", teams[0].1),
+            json!({}),
+        ),
+        (
+            Method::POST,
+            "/api/matches".to_string(),
+            json!({"bot_id": teams[0].1, "maze_id": practice}),
+        ),
+    ] {
+        let (s, v) = call(method, path.clone(), Some(body), org.clone()).await;
+        assert_eq!(s, 403, "{path}: {v}");
+    }
+    let (_, reg) = server.get("/api/registration", None).await;
+    assert_eq!(reg["mode"], "open", "{reg}");
     // Another entrant's bot cannot be entered by a key that is not its entrant's.
     let (s, v) = server
         .post(
@@ -411,6 +450,14 @@ async fn play_a_competition(server: &TestServer) {
         .post("/api/matches", practice_match.clone(), Some(&ada))
         .await;
     assert_eq!(s, 202, "{v}");
+    // Its stderr is Ada's: not another entrant's, not the organiser's.
+    let practice_id = v["match_id"].as_i64().unwrap();
+    for token in [&teams[1].0, &organiser] {
+        let (s, log) = server
+            .get(&format!("/api/matches/{practice_id}/log"), Some(token))
+            .await;
+        assert_eq!(s, 403, "{log}");
+    }
     let (s, v) = server
         .post("/api/matches", practice_match, Some(&ada))
         .await;

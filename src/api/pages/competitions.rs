@@ -16,10 +16,7 @@ fn summary(v: &CompetitionView) -> CompetitionSummary {
     CompetitionSummary {
         name: v.name.clone(),
         title: v.title.clone(),
-        phase: serde_json::to_value(v.phase)
-            .ok()
-            .and_then(|p| p.as_str().map(str::to_string))
-            .unwrap_or_default(),
+        phase: v.phase.as_str().to_string(),
         state: v.state.clone(),
         kind: v.kind.clone(),
         opens_at: when(v.opens_at),
