@@ -6,6 +6,8 @@
 //! - [`protocol`]: the bot protocol v1 messages and the strict decoding of bot replies.
 //! - [`competition`]: the pure rules of competitions (their file, timeline, quotas,
 //!   final selection and ranking). No I/O.
+//! - [`ranking`]: rankings that state their uncertainty (bootstrap intervals, rank
+//!   ranges, tie groups). No I/O.
 //! - [`runner`]: runs one bot process against one maze and returns a [`runner::MatchRecord`].
 //! - [`storage`]: the only SQL: bots, mazes, the match queue, tournaments, leaderboards.
 //! - [`registry`]: registering bots and versions (their files stored as bundles in
@@ -30,6 +32,7 @@ pub mod engine;
 pub mod manifest;
 pub mod metrics;
 pub mod protocol;
+pub mod ranking;
 pub mod registry;
 pub mod runner;
 pub mod storage;

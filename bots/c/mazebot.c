@@ -899,7 +899,6 @@ static void private_stdio(FILE **in, FILE **out)
 {
     int in_fd, out_fd, devnull;
 
-    fflush(stdout);
     *in = stdin;
     *out = stdout;
     in_fd = dup(0);
@@ -926,8 +925,12 @@ static void private_stdio(FILE **in, FILE **out)
     }
     *in = pin;
     *out = pout;
-    if (dup2(2, 1) >= 0)
+    if (dup2(2, 1) >= 0) {
+        /* Text printed before mb_run and still buffered goes to the log, not to the
+         * protocol channel, where the server would take it for an answer. */
+        fflush(stdout);
         setvbuf(stdout, NULL, _IOLBF, 0); /* the log, line by line */
+    }
     devnull = open("/dev/null", O_RDONLY);
     if (devnull >= 0) {
         dup2(devnull, 0);

@@ -414,7 +414,7 @@ pub(super) async fn default_board(
         ));
     }
     let rows = state.storage.leaderboard(Scope::Ranking).await?;
-    let rows = super::leaderboard::settled_for_caller(state, rows, caller).await?;
+    let rows = super::leaderboard::settled_for_caller(state, Scope::Ranking, rows, caller).await?;
     Ok(Board {
         board: kind,
         sealed: false,
@@ -431,6 +431,7 @@ pub(super) async fn default_board(
                 finished: r.finished,
                 mean_score: r.mean_score,
                 finish_rate: r.finish_rate,
+                uncertainty: r.uncertainty,
             })
             .collect(),
     })
@@ -514,6 +515,7 @@ async fn submissions(
                 finished: r.finished,
                 mean_score: r.mean_score,
                 finish_rate: r.finish_rate,
+                uncertainty: Default::default(),
             });
         let status = if s.build_status == "build_failed" || s.aborted {
             "not_counted"
@@ -636,7 +638,7 @@ async fn final_results(
             None => "the default competition has no final results".into(),
         }));
     }
-    let rows = state.storage.competition_results(c.competition_id).await?;
+    let rows = ops::results(&state.storage, &c).await?;
     Ok((c, rows))
 }
 

@@ -12,6 +12,7 @@ use utoipa_axum::routes;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppQuery, ErrorBody};
+use crate::registry::rankings;
 use crate::storage::leaderboard::{Scope, Standing};
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
@@ -66,7 +67,9 @@ async fn get_leaderboard(
         }
     };
     let rows = state.storage.leaderboard(scope).await?;
-    Ok(axum::Json(settled_for_caller(&state, rows, &caller).await?))
+    Ok(axum::Json(
+        settled_for_caller(&state, scope, rows, &caller).await?,
+    ))
 }
 
 /// The 409 for the standings of tournament `id`, which ranks for competition
@@ -91,20 +94,21 @@ pub(super) async fn competition_standings_elsewhere(
     )))
 }
 
-/// The standings as `caller` may see them ([`for_caller`]), and for anyone but the
-/// admin without the bot versions that still have a match on a hidden maze queued or
-/// running (their numbers would move with each such match, showing its result); the
-/// others are ranked again among themselves.
+/// The standings of `scope` as `caller` may see them ([`for_caller`]), and for anyone
+/// but the admin without the bot versions that still have a match on a hidden maze
+/// queued or running (their numbers would move with each such match, showing its
+/// result); ranked with their uncertainty among the lines shown.
 ///
 /// # Errors
 /// Database failures.
 pub(super) async fn settled_for_caller(
     state: &AppState,
+    scope: Scope,
     rows: Vec<Standing>,
     caller: &Caller,
 ) -> ApiResult<Vec<Standing>> {
     if caller.is_admin() {
-        return Ok(rows);
+        return Ok(rankings::rank(&state.storage, scope, rows).await?);
     }
     let pending: std::collections::HashSet<(i64, i64)> = state
         .storage
@@ -112,20 +116,12 @@ pub(super) async fn settled_for_caller(
         .await?
         .into_iter()
         .collect();
-    if pending.is_empty() {
-        return Ok(for_caller(rows, caller));
-    }
-    let mut kept: Vec<Standing> = rows
+    let kept: Vec<Standing> = rows
         .into_iter()
         .filter(|r| !pending.contains(&(r.bot_id, r.version)))
         .collect();
-    // Ranks again, ties (same mean score and finish rate) sharing one.
-    let ranks = crate::competition::selection::shared_ranks(&kept, |a, b| {
-        a.mean_score == b.mean_score && a.finish_rate == b.finish_rate
-    });
-    for (row, rank) in kept.iter_mut().zip(ranks) {
-        row.rank = rank;
-    }
+    // Ranked among the lines shown.
+    let kept = rankings::rank(&state.storage, scope, kept).await?;
     Ok(for_caller(kept, caller))
 }
 

@@ -178,7 +178,7 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                         c.closes_at.map_or("never".into(), |t| Timestamp(t).words())
                     );
                 }
-                let rows = storage.competition_results(c.competition_id).await?;
+                let rows = ops::results(&storage, &c).await?;
                 let differ = ops::recount_differences(&storage, &c).await?;
                 if csv {
                     print!("{}", ops::results_csv(&rows));

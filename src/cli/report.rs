@@ -5,22 +5,50 @@ use crate::manifest::BotManifest;
 use crate::storage::Storage;
 use crate::storage::leaderboard::Standing;
 
-/// Prints the standings as a table.
+/// Prints the standings as a table, with each mean's 95% interval, the ranks the
+/// intervals allow and the tie groups, then the rules in two lines.
 pub(super) fn print_table(rows: &[Standing]) {
     let width = rows.iter().map(|r| r.name.len()).max().unwrap_or(4).max(4);
     println!(
-        "{:>4}  {:<width$}  {:>10}  {:>8}  {:>10}  {:>6}",
-        "rank", "bot", "mean score", "finished", "vs optimum", "played"
+        "{:>4}  {:>8}  {:<width$}  {:>10}  {:>17}  {:>4}  {:>8}  {:>10}  {:>6}",
+        "rank",
+        "possible",
+        "bot",
+        "mean score",
+        "95% interval",
+        "tie",
+        "finished",
+        "vs optimum",
+        "played"
     );
     for r in rows {
+        let u = &r.uncertainty;
         println!(
-            "{:>4}  {:<width$}  {:>10.3}  {:>7.0}%  {:>10}  {:>6}",
+            "{:>4}  {:>8}  {:<width$}  {:>10.3}  {:>17}  {:>4}  {:>7.0}%  {:>10}  {:>6}",
             r.rank,
+            u.rank_range,
             r.name,
             r.mean_score,
+            format!("{:.3}-{:.3}", u.low, u.high),
+            if u.tied {
+                format!("={}", u.tie_group)
+            } else {
+                String::new()
+            },
             r.finish_rate * 100.0,
             r.mean_ratio.map_or("-".to_string(), |x| format!("{x:.3}")),
             r.played
+        );
+    }
+    println!(
+        "Lower mean first; equal means share a rank (by name). 95% interval: bootstrap over each maze's seeds;"
+    );
+    println!(
+        "possible: the ranks those intervals allow; tie =N: not significantly different from group N's first bot."
+    );
+    if rows.iter().any(|r| r.uncertainty.runs_per_maze == 1) {
+        println!(
+            "One run per maze: a randomized bot's luck is not measured (use --repeats 2 or more)."
         );
     }
 }

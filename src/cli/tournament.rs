@@ -263,9 +263,8 @@ async fn play(
         .get_tournament(t.tournament_id)
         .await?
         .context("the tournament vanished from the database")?;
-    let standings = storage
-        .leaderboard(Scope::Tournament(t.tournament_id))
-        .await?;
+    let standings =
+        registry::rankings::leaderboard(&storage, Scope::Tournament(t.tournament_id)).await?;
     let results = results(&storage, t.tournament_id).await?;
     if args.json {
         println!(

@@ -7,6 +7,7 @@
 
 use serde::Serialize;
 
+use super::rankings;
 use super::{RegistryError, Result};
 use crate::competition::selection::{self, Candidate, Rule, VersionScore};
 use crate::competition::spec::{self, check_schedule};
@@ -16,6 +17,7 @@ use crate::competition::{
 use crate::engine::mazefile;
 use crate::storage::Storage;
 use crate::storage::competitions::{BoardRow, CompetitionMaze, CompetitionRow, ResultRow};
+use crate::storage::leaderboard::Scope;
 
 /// Seeds drawn for every competition: enough for the most ranking and final repeats.
 pub const SEEDS: usize = 70;
@@ -423,6 +425,8 @@ pub struct BoardLine {
     pub mean_score: f64,
     /// finished / played.
     pub finish_rate: f64,
+    /// How sure the rank is ([`crate::ranking`]).
+    pub uncertainty: crate::ranking::Uncertainty,
 }
 
 /// A board as some caller may see it.
@@ -471,15 +475,30 @@ pub async fn board(
         organiser
             || (!r.pending && frozen_at.is_none_or(|f| r.created_at < f || phase == Phase::Closed))
     });
+    let mut standings = latest_per_bot(kept);
+    if let (Some(t), false) = (tournament, standings.is_empty()) {
+        let samples = storage.standing_samples(Scope::Tournament(t)).await?;
+        rankings::rank_lines(
+            &mut standings,
+            &samples,
+            |l| l.mean_score,
+            |l| l.bot_name.as_str(),
+            |l| (l.bot_id, l.version),
+            |l, rank, u| {
+                l.rank = rank;
+                l.uncertainty = u;
+            },
+        );
+    }
     Ok(Board {
         board: kind,
         sealed,
         frozen_at: frozen_at.map(Timestamp),
-        standings: latest_per_bot(kept),
+        standings,
     })
 }
 
-/// Each bot's latest version among `rows`, ranked.
+/// Each bot's latest version among `rows`, not yet ranked.
 fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
     let mut latest: Vec<BoardRow> = Vec::new();
     for r in rows {
@@ -489,19 +508,10 @@ fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
             None => latest.push(r),
         }
     }
-    latest.sort_by(|a, b| {
-        a.mean_score
-            .total_cmp(&b.mean_score)
-            .then(b.finish_rate.total_cmp(&a.finish_rate))
-            .then(a.bot_name.cmp(&b.bot_name))
-    });
-    let ranks = selection::shared_ranks(&latest, |a, b| {
-        a.mean_score == b.mean_score && a.finish_rate == b.finish_rate
-    });
-    let mut lines: Vec<BoardLine> = Vec::with_capacity(latest.len());
-    for (rank, r) in ranks.into_iter().zip(latest) {
-        lines.push(BoardLine {
-            rank,
+    latest
+        .into_iter()
+        .map(|r| BoardLine {
+            rank: 0,
             entrant: r.entrant_name.unwrap_or_default(),
             bot_id: r.bot_id,
             bot_name: r.bot_name,
@@ -510,9 +520,35 @@ fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
             finished: r.finished,
             mean_score: r.mean_score,
             finish_rate: r.finish_rate,
+            uncertainty: Default::default(),
+        })
+        .collect()
+}
+
+/// The stored results of `c`, best first, each with how sure its rank is (from the
+/// deciding set's matches, which no longer change; the stored ranks are kept).
+///
+/// # Errors
+/// The database.
+pub async fn results(storage: &Storage, c: &CompetitionRow) -> Result<Vec<ResultRow>> {
+    let mut rows = storage.competition_results(c.competition_id).await?;
+    if let (Some(t), false) = (deciding_tournament(c), rows.is_empty()) {
+        let samples = storage.standing_samples(Scope::Tournament(t)).await?;
+        rankings::rank_lines(
+            &mut rows,
+            &samples,
+            |r| r.mean_score,
+            |r| r.entrant_name.as_str(),
+            |r| (r.bot_id, r.version),
+            |r, _, u| r.uncertainty = u,
+        );
+        rows.sort_by(|a, b| {
+            a.rank
+                .cmp(&b.rank)
+                .then(a.entrant_name.cmp(&b.entrant_name))
         });
     }
-    lines
+    Ok(rows)
 }
 
 /// What the server's clock did in one [`tick`].
@@ -763,6 +799,7 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             mean_score: row.mean_score,
             finish_rate: row.finish_rate,
             manifest: manifest.to_string(),
+            uncertainty: Default::default(),
         });
     }
     let mut reveal = Vec::new();
@@ -823,7 +860,7 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
         }
     };
     let mut out = String::from(
-        "rank,entrant,bot,version,played,finished,mean_score,finish_rate,bundle_sha256\n",
+        "rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high,finish_rate,bundle_sha256\n",
     );
     for r in rows {
         let bundle = serde_json::from_str::<serde_json::Value>(&r.manifest)
@@ -831,14 +868,18 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
             .and_then(|m| m["bundle_sha256"].as_str().map(str::to_string))
             .unwrap_or_default();
         out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             r.rank,
+            r.uncertainty.rank_range,
+            r.uncertainty.tie_group,
             field(&r.entrant_name),
             field(&r.bot_name),
             r.version,
             r.played,
             r.finished,
             r.mean_score,
+            r.uncertainty.low,
+            r.uncertainty.high,
             r.finish_rate,
             bundle
         ));
@@ -915,18 +956,25 @@ mod tests {
             mean_score: 260.5,
             finish_rate: 0.75,
             manifest: r#"{"bundle_sha256":"abc"}"#.into(),
+            uncertainty: crate::ranking::Uncertainty {
+                low: 250.0,
+                high: 270.0,
+                rank_range: "1-2".into(),
+                tie_group: 1,
+                ..Default::default()
+            },
         };
         let csv = results_csv(&[row("team, \"a\"", "=cmd|' /c calc'!A1"), row("b", "@sum")]);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(
             lines[0],
-            "rank,entrant,bot,version,played,finished,mean_score,finish_rate,bundle_sha256"
+            "rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high,finish_rate,bundle_sha256"
         );
         assert_eq!(
             lines[1],
-            r#"1,"team, ""a""",'=cmd|' /c calc'!A1,2,4,3,260.5,0.75,abc"#
+            r#"1,1-2,1,"team, ""a""",'=cmd|' /c calc'!A1,2,4,3,260.5,250,270,0.75,abc"#
         );
-        assert_eq!(lines[2], "1,b,'@sum,2,4,3,260.5,0.75,abc");
+        assert_eq!(lines[2], "1,1-2,1,b,'@sum,2,4,3,260.5,250,270,0.75,abc");
     }
 
     #[tokio::test]

@@ -14,6 +14,8 @@
 //!   writes the results.
 //! - [`mazes`]: admitting a maze (parsed, made canonical, solved, stored once by layout).
 //! - [`migrate`]: moving versions stored in an older data folder into the database.
+//! - [`rankings`]: standings ranked with their uncertainty (intervals, rank ranges,
+//!   tie groups).
 //! - [`tokens`]: owner and admin tokens.
 //!
 //! Every failure is a [`RegistryError`], which says whose fault it was.
@@ -24,6 +26,7 @@ pub mod cache;
 pub mod competitions;
 pub mod mazes;
 pub mod migrate;
+pub mod rankings;
 pub mod tokens;
 
 use crate::botfiles::BundleError;

@@ -213,6 +213,10 @@ pub struct ResultRow {
     /// What makes the row checkable and replayable (JSON): the version's bundle hash, the
     /// referee version, the mazes' hashes, the seeds, the limits, the recount.
     pub manifest: String,
+    /// How sure the rank is (not stored: counted from the matches when read, by
+    /// [`crate::registry::competitions::results`]).
+    #[sqlx(skip)]
+    pub uncertainty: crate::ranking::Uncertainty,
 }
 
 impl Storage {

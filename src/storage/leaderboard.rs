@@ -5,6 +5,7 @@ use sqlx::FromRow;
 
 use super::{Result, Storage};
 use crate::engine::score::DNF_SCORE;
+use crate::ranking::{Sample, Uncertainty};
 
 /// Which matches a leaderboard counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,6 +46,9 @@ pub struct Standing {
     /// How many of the matches counted were on hidden mazes (not serialized).
     #[serde(skip)]
     pub hidden_played: i64,
+    /// How sure the rank is (filled by [`crate::registry::rankings`]).
+    #[sqlx(skip)]
+    pub uncertainty: Uncertainty,
 }
 
 impl Storage {
@@ -143,6 +147,46 @@ impl Storage {
              order by mean_score asc, finish_rate desc, b.name asc"
         );
         self.standings(&sql, scope).await
+    }
+
+    /// Every played match a standing of `scope` counts, as (bot id, version, sample):
+    /// the data of its intervals and tie groups ([`crate::ranking`]). The same matches
+    /// as [`Storage::leaderboard_recount`].
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn standing_samples(&self, scope: Scope) -> Result<Vec<(i64, i64, Sample)>> {
+        let filter = match scope {
+            Scope::Tournament(_) => "m.tournament_id = $1",
+            Scope::Ranking => {
+                "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = v.bot_id)
+                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
+            }
+            Scope::All => {
+                "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = v.bot_id)
+                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
+            }
+        };
+        let tournament = match scope {
+            Scope::Tournament(id) => Some(id),
+            _ => None,
+        };
+        let sql = format!(
+            "select v.bot_id, v.version, m.maze_id, m.seed,
+                 cast(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end as double precision)
+             from match m
+             join bot_version v on v.bot_version_id = m.bot_version_id
+             join maze z on z.maze_id = m.maze_id
+             where m.status not in ('queued', 'running') and {filter}"
+        );
+        let rows: Vec<(i64, i64, i64, i64, f64)> = sqlx::query_as(&sql)
+            .bind(tournament)
+            .fetch_all(self.pool())
+            .await?;
+        Ok(rows
+            .into_iter()
+            .map(|(bot, version, maze, seed, score)| (bot, version, Sample { maze, seed, score }))
+            .collect())
     }
 
     async fn standings(&self, sql: &str, scope: Scope) -> Result<Vec<Standing>> {

@@ -233,6 +233,10 @@ async fn play_a_competition(server: &TestServer) {
             .all(|r| r["played"] == 4),
         "{board}"
     );
+    // Each line states how sure it is: an interval around its mean, a rank range.
+    for r in board["standings"].as_array().unwrap() {
+        assert_interval(r, "mean_score");
+    }
 
     // Sealed before the close: the private board, tournament and matches, for an entrant
     // and for an anonymous client; the organiser sees them.
@@ -568,6 +572,7 @@ async fn play_a_competition(server: &TestServer) {
     for row in rows {
         // The final run: each selected version once on each of the 2 private mazes.
         assert_eq!(row["played"], 2, "{row}");
+        assert_interval(row, "mean_score");
         let manifest: Value = serde_json::from_str(row["manifest"].as_str().unwrap()).unwrap();
         assert_eq!(manifest["recount"]["equal"], true, "{manifest}");
         assert_eq!(manifest["mazes"].as_array().unwrap().len(), 2);
@@ -582,6 +587,10 @@ async fn play_a_competition(server: &TestServer) {
     let (_, page) = server.get_text("/competitions/class-2027").await;
     assert!(
         page.contains("Final results") && !page.contains("Sealed until the close"),
+        "{page}"
+    );
+    assert!(
+        page.contains("95% interval") && page.contains("equal means share a rank"),
         "{page}"
     );
     assert_eq!(
@@ -642,7 +651,10 @@ async fn play_a_competition(server: &TestServer) {
         .unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 4, "{csv}");
-    assert!(lines[0].starts_with("rank,entrant,bot,version"), "{csv}");
+    assert!(
+        lines[0].starts_with("rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high"),
+        "{csv}"
+    );
     for name in ["ada", "brian", "claude"] {
         assert_eq!(
             lines
@@ -665,4 +677,22 @@ async fn play_a_competition(server: &TestServer) {
         list["items"][0]["limits"]["move_timeout_ms"], 2000,
         "{list}"
     );
+}
+
+/// A standing line states its uncertainty: an interval that holds `mean`, and a rank
+/// range that holds its rank.
+fn assert_interval(line: &Value, mean: &str) {
+    let u = &line["uncertainty"];
+    let (low, high, m) = (
+        u["low"].as_f64().unwrap(),
+        u["high"].as_f64().unwrap(),
+        line[mean].as_f64().unwrap(),
+    );
+    assert!(low <= m && m <= high, "{line}");
+    let rank = line["rank"].as_i64().unwrap();
+    assert!(
+        u["rank_best"].as_i64().unwrap() <= rank && rank <= u["rank_worst"].as_i64().unwrap(),
+        "{line}"
+    );
+    assert!(u["tie_group"].as_i64().unwrap() >= 1, "{line}");
 }

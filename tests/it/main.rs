@@ -12,6 +12,7 @@ mod faults;
 mod hostile;
 mod mazefiles;
 mod pages;
+mod rankings;
 mod readme;
 mod referee;
 mod runner;

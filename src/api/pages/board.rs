@@ -50,7 +50,13 @@ pub(super) async fn leaderboard_page(
     let storage = &state.storage;
     let state = &state;
     let board = |scope| async move {
-        settled_for_caller(state, storage.leaderboard(scope).await?, &Caller::Anonymous).await
+        settled_for_caller(
+            state,
+            scope,
+            storage.leaderboard(scope).await?,
+            &Caller::Anonymous,
+        )
+        .await
     };
     let (scope, rows) = match (q.tournament, q.scope.as_deref()) {
         (Some(_), Some(_)) => {

@@ -60,7 +60,7 @@ pub(super) async fn competition_page(
         )
     };
     let results = if c.state.as_deref() == Some("final") {
-        Some(state.storage.competition_results(c.competition_id).await?)
+        Some(crate::registry::competitions::results(&state.storage, &c).await?)
     } else {
         None
     };

@@ -285,7 +285,7 @@ async fn tournament_page(
         .filter(|t| !t.sealed)
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
     let (standings, sealed) = tournament_for_caller(
-        state.storage.leaderboard(Scope::Tournament(id)).await?,
+        crate::registry::rankings::leaderboard(&state.storage, Scope::Tournament(id)).await?,
         &Caller::Anonymous,
         t.done >= t.total,
         t.competition_id.is_some(),

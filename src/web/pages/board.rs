@@ -3,6 +3,7 @@
 use maud::{Markup, html};
 
 use super::super::layout::{page, status, time};
+use super::ranks;
 use crate::storage::leaderboard::Standing;
 use crate::storage::mazes::MazeRow;
 use crate::storage::tournaments::TournamentRow;
@@ -116,6 +117,7 @@ pub(super) fn standings_table(s: &StandingsSection) -> Markup {
                     th.num { (link(SortKey::Rank, "rank")) }
                     th { (link(SortKey::Name, "bot")) }
                     th.num { (link(SortKey::Rank, "mean score")) }
+                    (ranks::header_cells())
                     th.num { (link(SortKey::FinishRate, "finish rate")) }
                     th.num title="mean of score / the maze's optimal run-1 steps (1.0 is perfect)" {
                         (link(SortKey::Efficiency, "score / optimum"))
@@ -125,9 +127,11 @@ pub(super) fn standings_table(s: &StandingsSection) -> Markup {
                 tbody {
                     @for r in &s.rows {
                         tr {
-                            td.num { (r.rank) }
+                            (ranks::rank_cell(r.rank, &r.uncertainty))
                             td { a href={ "/bots/" (r.bot_id) } { (r.name) } span.muted { " v" (r.version) } }
                             td.num { (format!("{:.3}", r.mean_score)) }
+                            (ranks::interval_cell(&r.uncertainty))
+                            (ranks::tie_cell(&r.uncertainty))
                             td.num { (format!("{:.0}%", r.finish_rate * 100.0)) }
                             td.num { @match r.mean_ratio { Some(x) => (format!("{x:.3}")), None => span.muted { "-" } } }
                             td.num { (r.played) }
@@ -135,6 +139,7 @@ pub(super) fn standings_table(s: &StandingsSection) -> Markup {
                     }
                 }
             }
+            (ranks::ranking_note(s.rows.iter().map(|r| &r.uncertainty)))
             @if s.rows.iter().any(|r| r.mean_ratio.is_none()) {
                 p.muted.ratio-note { "score / optimum: \"-\" where hidden mazes are counted (over a hidden maze the ratio would give its optimum away)." }
             }
@@ -233,6 +238,7 @@ mod tests {
             finish_rate: 1.0 / rank as f64,
             mean_ratio: ratio,
             hidden_played: 0,
+            uncertainty: Default::default(),
         }
     }
 

@@ -5,6 +5,7 @@
 use maud::{Markup, PreEscaped, html};
 
 use super::super::layout::page;
+use super::ranks;
 use crate::registry::competitions::{Board, BoardLine};
 use crate::storage::competitions::ResultRow;
 
@@ -97,20 +98,23 @@ fn board_table(lines: &[BoardLine]) -> Markup {
     html! {
         @if lines.is_empty() { p.muted { "No entrant has a version with all its matches played yet." } } @else {
             table.data.board {
-                thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num { "version" } th.num { "mean score" } th.num { "finished" } } }
+                thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num { "version" } th.num { "mean score" } (ranks::header_cells()) th.num { "finished" } } }
                 tbody {
                     @for l in lines {
                         tr {
-                            td.num { (l.rank) }
+                            (ranks::rank_cell(l.rank, &l.uncertainty))
                             td { (l.entrant) }
                             td { a href={ "/bots/" (l.bot_id) } { (l.bot_name) } }
                             td.num { (l.version) }
                             td.num { (format!("{:.3}", l.mean_score)) }
+                            (ranks::interval_cell(&l.uncertainty))
+                            (ranks::tie_cell(&l.uncertainty))
                             td.num { (l.finished) "/" (l.played) }
                         }
                     }
                 }
             }
+            (ranks::ranking_note(lines.iter().map(|l| &l.uncertainty)))
         }
     }
 }
@@ -153,18 +157,21 @@ pub fn competition(p: &CompetitionPage) -> String {
             p { a href={ "/api/competitions/" (c.name) "/results.csv" } { "CSV" } " · "
                 a href={ "/api/competitions/" (c.name) "/results" } { "JSON with manifests" } }
             table.data.results {
-                thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num { "version" } th.num { "mean score" } th.num { "finished" } } }
+                thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num { "version" } th.num { "mean score" } (ranks::header_cells()) th.num { "finished" } } }
                 tbody {
                     @for r in rows {
                         tr {
-                            td.num { (r.rank) } td { (r.entrant_name) }
+                            (ranks::rank_cell(r.rank, &r.uncertainty)) td { (r.entrant_name) }
                             td { a href={ "/bots/" (r.bot_id) } { (r.bot_name) } }
                             td.num { (r.version) } td.num { (format!("{:.3}", r.mean_score)) }
+                            (ranks::interval_cell(&r.uncertainty))
+                            (ranks::tie_cell(&r.uncertainty))
                             td.num { (r.finished) "/" (r.played) }
                         }
                     }
                 }
             }
+            (ranks::ranking_note(rows.iter().map(|r| &r.uncertainty)))
         }
         h2 { "Public leaderboard" }
         @if let Some(f) = &p.public.frozen_at { p.muted { "Frozen since " (f.words()) " UTC: versions uploaded later show after the close." } }

@@ -9,6 +9,7 @@ mod board;
 mod competitions;
 mod detail;
 mod lists;
+mod ranks;
 
 pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
 pub use competitions::{

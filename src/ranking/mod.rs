@@ -1,0 +1,287 @@
+//! Rankings that state their uncertainty (pure; no I/O): each bot's mean score with a
+//! 95% interval, its rank as a range where intervals overlap, and tie groups of bots
+//! whose difference is not significant.
+//!
+//! The rules, the same on every surface (API, pages, `tournament` table, CSV):
+//! - **Order and rank.** Lower mean score first. Bots whose mean scores are equal (to
+//!   one part in 10^9) share a rank, as in 1, 1, 3, and are listed by name.
+//! - **Interval.** The 95% percentile interval of the mean from a bootstrap that keeps
+//!   the mazes and resamples each maze's runs (one per seed), with a fixed seed
+//!   ([`bootstrap`]). It measures the luck of the seeds: a bot that scores the same on
+//!   every seed of a maze has a zero-width interval. With one run per maze nothing is
+//!   measured (`runs_per_maze` says so).
+//! - **Rank range.** Best: 1 + the bots whose interval lies wholly below this bot's
+//!   (surely better). Worst: 1 + the bots of another mean whose interval starts below
+//!   this bot's upper end (possibly better). Shown as "2-4", or "3" when both ends
+//!   agree.
+//! - **Tie groups.** Going down the table, a bot joins the group above when its
+//!   difference from that group's first bot is not significant: the 95% interval of the
+//!   mean difference over the mazes and seeds both played (the same bootstrap, paired)
+//!   holds 0. Bots with equal means always share a group. Without common mazes and
+//!   seeds, bots differ when their intervals do not overlap.
+
+pub mod bootstrap;
+
+use bootstrap::Cells;
+
+/// One match of a bot: its maze, its seed and its score (a did-not-finish as 1000).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// The maze (any id that is the same for every bot).
+    pub maze: i64,
+    /// The seed.
+    pub seed: i64,
+    /// The score, 1000 for a match that did not finish.
+    pub score: f64,
+}
+
+/// A bot's line of a standing, as ranked: its place and how sure it is.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, utoipa::ToSchema)]
+pub struct Uncertainty {
+    /// Lower end of the 95% interval of the mean score.
+    pub low: f64,
+    /// Upper end of the 95% interval of the mean score.
+    pub high: f64,
+    /// The best rank the intervals allow.
+    pub rank_best: i64,
+    /// The worst rank the intervals allow.
+    pub rank_worst: i64,
+    /// `rank_best` and `rank_worst` as text: "2-4", or "3" when they agree.
+    pub rank_range: String,
+    /// The tie group, 1 for the leader's: bots of a group are not significantly
+    /// different from its first bot.
+    pub tie_group: i64,
+    /// Whether another bot shares the tie group.
+    pub tied: bool,
+    /// The fewest runs (seeds) the bot has on any one maze; with 1 the intervals
+    /// measure nothing.
+    pub runs_per_maze: i64,
+}
+
+/// A bot to rank: its mean score (as the standings show it) and its matches.
+#[derive(Debug, Clone, Copy)]
+pub struct Entry<'a> {
+    /// Mean score.
+    pub mean: f64,
+    /// Its matches.
+    pub samples: &'a [Sample],
+}
+
+/// Whether two mean scores count as equal.
+pub fn same_score(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+}
+
+/// Ranks `entries`, given best first (ascending mean): each one's rank (shared by equal
+/// means) and its [`Uncertainty`], by the rules in the module's documentation.
+pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
+    let cells: Vec<Cells> = entries.iter().map(|e| Cells::new(e.samples)).collect();
+    let intervals: Vec<(f64, f64)> = entries
+        .iter()
+        .zip(&cells)
+        .map(|(e, c)| {
+            if c.is_empty() {
+                (e.mean, e.mean)
+            } else {
+                let (low, high) = c.interval();
+                if low == high {
+                    // No spread: the mean itself (as the standings add it up).
+                    (e.mean, e.mean)
+                } else {
+                    (low.min(e.mean), high.max(e.mean))
+                }
+            }
+        })
+        .collect();
+    let mut out = Vec::with_capacity(entries.len());
+    let mut group = 0i64;
+    let mut leader = 0usize;
+    for (i, e) in entries.iter().enumerate() {
+        let rank = 1 + entries
+            .iter()
+            .filter(|o| o.mean < e.mean && !same_score(o.mean, e.mean))
+            .count() as i64;
+        let (low, high) = intervals[i];
+        let best = 1 + intervals.iter().filter(|(_, h)| *h < low).count() as i64;
+        let worst = 1 + entries
+            .iter()
+            .zip(&intervals)
+            .filter(|(o, (l, _))| *l < high && !same_score(o.mean, e.mean))
+            .count() as i64;
+        let joins = i > 0
+            && (same_score(entries[i - 1].mean, e.mean)
+                || !differ(&cells[leader], &cells[i], intervals[leader], intervals[i]));
+        if !joins {
+            group += 1;
+            leader = i;
+        }
+        out.push((
+            rank,
+            Uncertainty {
+                low,
+                high,
+                rank_best: best.min(rank),
+                rank_worst: worst.max(rank),
+                rank_range: String::new(),
+                tie_group: group,
+                tied: false,
+                runs_per_maze: cells[i].runs_per_maze() as i64,
+            },
+        ));
+    }
+    for i in 0..out.len() {
+        let g = out[i].1.tie_group;
+        let tied = out.iter().filter(|(_, u)| u.tie_group == g).count() > 1;
+        let u = &mut out[i].1;
+        u.tied = tied;
+        u.rank_range = if u.rank_best == u.rank_worst {
+            u.rank_best.to_string()
+        } else {
+            format!("{}-{}", u.rank_best, u.rank_worst)
+        };
+    }
+    out
+}
+
+/// Whether two bots differ significantly: paired over the mazes and seeds both played,
+/// or by their intervals when they share none.
+fn differ(a: &Cells, b: &Cells, ia: (f64, f64), ib: (f64, f64)) -> bool {
+    let d = a.differences(b);
+    if d.is_empty() {
+        return ia.1 < ib.0 || ib.1 < ia.0;
+    }
+    if d.all_zero() {
+        return false;
+    }
+    let (low, high) = d.interval();
+    low > 0.0 || high < 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn runs(maze_scores: &[(i64, &[f64])]) -> Vec<Sample> {
+        let mut out = Vec::new();
+        for (maze, scores) in maze_scores {
+            for (seed, score) in scores.iter().enumerate() {
+                out.push(Sample {
+                    maze: *maze,
+                    seed: seed as i64,
+                    score: *score,
+                });
+            }
+        }
+        out
+    }
+
+    fn mean(s: &[Sample]) -> f64 {
+        s.iter().map(|x| x.score).sum::<f64>() / s.len() as f64
+    }
+
+    fn table(bots: &[Vec<Sample>]) -> Vec<(i64, Uncertainty)> {
+        let entries: Vec<Entry> = bots
+            .iter()
+            .map(|s| Entry {
+                mean: mean(s),
+                samples: s,
+            })
+            .collect();
+        assess(&entries)
+    }
+
+    /// The case worked by hand in docs/RANKINGS.md: five deterministic or nearly
+    /// deterministic bots on two mazes, two seeds each.
+    #[test]
+    fn the_hand_computed_case() {
+        // A and B: the same records (two names for one bot). C: 1 point worse on
+        // every cell (a real difference, however small). D: C's mean, but seed luck
+        // on maze 2 (18 or 22 around C's 20). E: far behind.
+        let a = runs(&[(1, &[10.0, 10.0]), (2, &[19.0, 19.0])]);
+        let b = a.clone();
+        let c = runs(&[(1, &[11.0, 11.0]), (2, &[20.0, 20.0])]);
+        let d = runs(&[(1, &[11.0, 11.0]), (2, &[18.0, 22.0])]);
+        let e = runs(&[(1, &[40.0, 40.0]), (2, &[40.0, 40.0])]);
+        let t = table(&[a, b, c, d, e]);
+        let ranks: Vec<i64> = t.iter().map(|(r, _)| *r).collect();
+        // A and B share rank 1; C and D have equal means (15.5) and share rank 3.
+        assert_eq!(ranks, vec![1, 1, 3, 3, 5]);
+        // Intervals: A, B, C, E are deterministic (zero width). D's maze-2 runs are 18
+        // and 22: each replicate draws two of them, so its maze-2 sum is 36, 40 or 44
+        // (probabilities 1/4, 1/2, 1/4) and its mean over 4 runs is 14.5, 15.5 or
+        // 16.5; the 2.5% and 97.5% percentiles are 14.5 and 16.5.
+        let iv: Vec<(f64, f64)> = t.iter().map(|(_, u)| (u.low, u.high)).collect();
+        assert_eq!(
+            iv,
+            vec![
+                (14.5, 14.5),
+                (14.5, 14.5),
+                (15.5, 15.5),
+                (14.5, 16.5),
+                (40.0, 40.0)
+            ]
+        );
+        // Rank ranges: only D's interval is wide. A and B: nothing surely or possibly
+        // better (D starts at their 14.5, which is a tie at best): "1". C: A and B surely
+        // better, D equal: "3". D: nothing surely better (best 1), A and B possibly
+        // (they start below 16.5; C is equal): worst 3. E: 5.
+        let rr: Vec<&str> = t.iter().map(|(_, u)| u.rank_range.as_str()).collect();
+        assert_eq!(rr, vec!["1", "1", "3", "1-3", "5"]);
+        // Tie groups: {A, B} (identical); C differs from A on every cell by exactly 1
+        // (paired interval [1, 1] excludes 0): a new group; D equal to C: C's group; E
+        // a group of its own.
+        let groups: Vec<(i64, bool)> = t.iter().map(|(_, u)| (u.tie_group, u.tied)).collect();
+        assert_eq!(
+            groups,
+            vec![(1, true), (1, true), (2, true), (2, true), (3, false)]
+        );
+        assert!(t.iter().all(|(_, u)| u.runs_per_maze == 2));
+    }
+
+    #[test]
+    fn a_difference_inside_the_luck_of_the_seeds_is_a_tie_and_a_clear_one_is_not() {
+        let noisy = |offset: f64| -> Vec<Sample> {
+            let scores: Vec<f64> = (0..12)
+                .map(|k| 20.0 + offset + if k % 2 == 0 { -5.0 } else { 5.0 } * ((k % 3) as f64))
+                .collect();
+            runs(&[(1, &scores)])
+        };
+        // Paired: the same seeds give the same luck, so a constant 0.5 is significant.
+        let t = table(&[noisy(0.0), noisy(0.5)]);
+        assert_eq!((t[0].1.tie_group, t[1].1.tie_group), (1, 2));
+        // Luck that does not pair up (another bot's seed order): a 0.5 gap is a tie.
+        let mut shuffled = noisy(0.5);
+        let n = shuffled.len() as i64;
+        for s in &mut shuffled {
+            s.seed = (s.seed * 5 + 1) % n;
+        }
+        let t = table(&[noisy(0.0), shuffled]);
+        assert_eq!((t[0].1.tie_group, t[1].1.tie_group), (1, 1));
+        assert_eq!(t[1].1.rank_range, "1-2");
+        assert!(t[0].1.low < t[0].1.high);
+    }
+
+    #[test]
+    fn bots_without_common_cells_differ_only_when_their_intervals_do_not_meet() {
+        let a = runs(&[(1, &[10.0, 10.0])]);
+        let b = runs(&[(2, &[12.0, 12.0])]);
+        let t = table(&[a, b]);
+        assert_eq!(t[1].1.tie_group, 2);
+        assert_eq!(t[1].1.rank_range, "2");
+    }
+
+    #[test]
+    fn the_same_records_give_the_same_table() {
+        let bots: Vec<Vec<Sample>> = (0..4)
+            .map(|b| {
+                let s: Vec<f64> = (0..6)
+                    .map(|k| 20.0 + ((k * 7 + b * 3) % 5) as f64)
+                    .collect();
+                runs(&[(1, &s), (2, &s)])
+            })
+            .collect();
+        let mut sorted = bots.clone();
+        sorted.sort_by(|x, y| mean(x).total_cmp(&mean(y)));
+        assert_eq!(table(&sorted), table(&sorted));
+    }
+}
