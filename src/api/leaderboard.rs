@@ -12,7 +12,6 @@ use utoipa_axum::routes;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppQuery, ErrorBody};
-use crate::registry::rankings;
 use crate::storage::leaderboard::{Scope, Standing};
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
@@ -108,7 +107,7 @@ pub(super) async fn settled_for_caller(
     caller: &Caller,
 ) -> ApiResult<Vec<Standing>> {
     if caller.is_admin() {
-        return Ok(rankings::rank(&state.storage, scope, rows).await?);
+        return Ok(state.ranker.rank(&state.storage, scope, rows).await?);
     }
     let pending: std::collections::HashSet<(i64, i64)> = state
         .storage
@@ -121,7 +120,7 @@ pub(super) async fn settled_for_caller(
         .filter(|r| !pending.contains(&(r.bot_id, r.version)))
         .collect();
     // Ranked among the lines shown.
-    let kept = rankings::rank(&state.storage, scope, kept).await?;
+    let kept = state.ranker.rank(&state.storage, scope, kept).await?;
     Ok(for_caller(kept, caller))
 }
 

@@ -130,6 +130,8 @@ pub struct AppState {
     pub metrics: Metrics,
     /// Wakes the workers when matches are queued.
     pub wake: Arc<Notify>,
+    /// Ranks standings with their uncertainty, keeping the last tables.
+    pub ranker: Arc<crate::registry::rankings::Ranker>,
 }
 
 /// The OpenAPI document's header; paths come from the handlers.

@@ -157,7 +157,10 @@ async fn get_tournament(
         .filter(|t| !t.sealed || caller.can_organise())
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
     let (standings, standings_sealed) = super::leaderboard::tournament_for_caller(
-        crate::registry::rankings::leaderboard(&state.storage, Scope::Tournament(id)).await?,
+        state
+            .ranker
+            .leaderboard(&state.storage, Scope::Tournament(id))
+            .await?,
         &caller,
         t.done >= t.total,
         t.competition_id.is_some(),

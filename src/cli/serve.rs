@@ -248,6 +248,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         }),
         metrics: metrics.clone(),
         wake: wake.clone(),
+        ranker: Default::default(),
     };
 
     let listener = TcpListener::bind(&args.bind)

@@ -263,8 +263,9 @@ async fn play(
         .get_tournament(t.tournament_id)
         .await?
         .context("the tournament vanished from the database")?;
-    let standings =
-        registry::rankings::leaderboard(&storage, Scope::Tournament(t.tournament_id)).await?;
+    let standings = registry::rankings::Ranker::default()
+        .leaderboard(&storage, Scope::Tournament(t.tournament_id))
+        .await?;
     let results = results(&storage, t.tournament_id).await?;
     if args.json {
         println!(

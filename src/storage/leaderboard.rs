@@ -171,13 +171,16 @@ impl Storage {
             Scope::Tournament(id) => Some(id),
             _ => None,
         };
+        // One row per (version, maze, seed): several runs on one seed are averaged
+        // (as the ranking does), so a standing counted many times over reads few rows.
         let sql = format!(
             "select v.bot_id, v.version, m.maze_id, m.seed,
-                 cast(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end as double precision)
+                 cast(avg(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) as double precision)
              from match m
              join bot_version v on v.bot_version_id = m.bot_version_id
              join maze z on z.maze_id = m.maze_id
-             where m.status not in ('queued', 'running') and {filter}"
+             where m.status not in ('queued', 'running') and {filter}
+             group by v.bot_id, v.version, m.maze_id, m.seed"
         );
         let rows: Vec<(i64, i64, i64, i64, f64)> = sqlx::query_as(&sql)
             .bind(tournament)

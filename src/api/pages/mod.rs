@@ -285,7 +285,10 @@ async fn tournament_page(
         .filter(|t| !t.sealed)
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
     let (standings, sealed) = tournament_for_caller(
-        crate::registry::rankings::leaderboard(&state.storage, Scope::Tournament(id)).await?,
+        state
+            .ranker
+            .leaderboard(&state.storage, Scope::Tournament(id))
+            .await?,
         &Caller::Anonymous,
         t.done >= t.total,
         t.competition_id.is_some(),
