@@ -1,6 +1,6 @@
 # mazearena server image: the release binary, bubblewrap (every bot runs in its sandbox),
-# plus Python 3 and Node.js so that uploaded bots and the starter bots can run, and gcc
-# and make so that C sources uploaded with a `build` command can be built (add a Rust
+# plus Python 3 and Node.js so that uploaded bots and the starter bots can run, and gcc,
+# g++ and make so that C and C++ sources uploaded with a `build` command can be built (add a Rust
 # toolchain here to build Rust sources on the server).
 
 FROM rust:1-bookworm AS build
@@ -13,7 +13,7 @@ RUN cargo build --release --locked
 
 FROM debian:bookworm-slim
 RUN apt-get update \
-    && apt-get install -y --no-install-recommends python3 nodejs tini ca-certificates bubblewrap gcc make libc6-dev \
+    && apt-get install -y --no-install-recommends python3 nodejs tini ca-certificates bubblewrap gcc g++ make libc6-dev \
     && rm -rf /var/lib/apt/lists/* \
     && useradd --system --create-home --home-dir /var/lib/mazearena mazearena \
     && mkdir -p /var/lib/mazearena/db /var/lib/mazearena/bots \

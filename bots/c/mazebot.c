@@ -1036,8 +1036,11 @@ int mb_run(const mb_bot *bot)
             else
                 fprintf(out, "{\"rotation\":%d,\"movement\":%d", a.rotation, a.movement);
             if (debug != NULL) {
+                /* A valid object has line breaks only between its tokens (a string
+                 * holds them escaped): written as spaces, it stays one line. */
                 fputs(",\"debug\":", out);
-                fputs(debug, out);
+                for (const char *p = debug; *p != 0; p++)
+                    putc(*p == '\n' || *p == '\r' ? ' ' : *p, out);
             }
             fputs("}\n", out);
             if (fflush(out) != 0 || ferror(out))

@@ -10,26 +10,35 @@ use serde_json::Value;
 
 use crate::support::{mazearena_json, root, shared_maze};
 
-/// Whether `program` runs on this machine.
+/// Whether `program` runs on this machine (`--version`, or Go's `version`).
 fn have(program: &str) -> bool {
-    Command::new(program)
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success())
+    ["--version", "version"].iter().any(|arg| {
+        Command::new(program)
+            .arg(arg)
+            .output()
+            .is_ok_and(|o| o.status.success())
+    })
 }
 
-/// The kits whose toolchain is here: (folder, tools needed). Others are skipped with a
-/// printed reason.
-fn available_kits() -> Vec<&'static str> {
-    let kits: [(&str, &[&str]); 4] = [
+/// The kits whose toolchain is here: (folder, tools needed). Outside CI the others are
+/// skipped with a printed reason; in CI (`CI=true`) a missing toolchain fails the test.
+pub(crate) fn available_kits() -> Vec<&'static str> {
+    let kits: [(&str, &[&str]); 7] = [
         ("python", &["python3"]),
         ("javascript", &["node"]),
         ("rust", &["cargo"]),
         ("c", &["make", "cc"]),
+        ("cpp", &["make", "g++"]),
+        ("go", &["go"]),
+        ("java", &["javac", "java"]),
     ];
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
     let mut out = Vec::new();
     for (kit, tools) in kits {
         match tools.iter().find(|t| !have(t)) {
+            Some(missing) if ci => panic!(
+                "the {kit} kit needs {missing}, which is not installed (.ci/run installs it)"
+            ),
             Some(missing) => eprintln!("SKIPPED the {kit} kit: {missing} is not installed"),
             None => out.push(kit),
         }
@@ -37,7 +46,7 @@ fn available_kits() -> Vec<&'static str> {
     out
 }
 
-fn build(dir: &Path, command: &[&str]) {
+pub(crate) fn build(dir: &Path, command: &[&str]) {
     // Cargo builds into the kit's own target/ (where its manifests look), whatever
     // target folder the tests themselves were built in.
     let status = Command::new(command[0])
@@ -74,9 +83,32 @@ fn each_starter_kits_minimal_bot_finishes_a_real_match() {
                 build(&dir, &["cargo", "build", "--release", "--quiet"]);
                 dir.join("target/release/minimal_bot").display().to_string()
             }
-            "c" => {
+            "c" | "cpp" => {
                 build(&dir, &["make", "-s"]);
                 dir.join("minimal_bot").display().to_string()
+            }
+            "go" => {
+                build(&dir, &["go", "vet", "./..."]);
+                build(&dir, &["go", "test", "-count=1", "./..."]);
+                build(
+                    &dir,
+                    &[
+                        "go",
+                        "build",
+                        "-buildvcs=false",
+                        "-o",
+                        "minimal_bot",
+                        "./cmd/minimal_bot",
+                    ],
+                );
+                dir.join("minimal_bot").display().to_string()
+            }
+            "java" => {
+                let manifest = mazearena::manifest::load(&dir).expect("the java kit's bot.toml");
+                let words = shlex::split(manifest[0].build.as_deref().unwrap()).unwrap();
+                let words: Vec<&str> = words.iter().map(String::as_str).collect();
+                build(&dir, &words);
+                manifest[0].command.clone()
             }
             other => unreachable!("unknown kit {other}"),
         };

@@ -21,6 +21,31 @@ const ETC_FILES: &[&str] = &[
     "/etc/ssl/openssl.cnf",
 ];
 
+/// The folders of /etc whose name starts with one of these are mounted too: Debian's
+/// JDKs keep their configuration there (`/etc/java-17-openjdk`: without its
+/// `security/java.security`, `javac` and `SecureRandom` fail).
+const ETC_PREFIXES: &[&str] = &["java-"];
+
+/// [`ETC_FILES`] and the folders of [`ETC_PREFIXES`] that exist, in a fixed order.
+fn etc_entries() -> Vec<String> {
+    let mut out: Vec<String> = ETC_FILES.iter().map(|f| f.to_string()).collect();
+    let mut extra: Vec<String> = std::fs::read_dir("/etc")
+        .into_iter()
+        .flatten()
+        .filter_map(Result::ok)
+        .filter(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            ETC_PREFIXES.iter().any(|p| name.starts_with(p))
+                && e.file_type().is_ok_and(|t| t.is_dir())
+        })
+        .map(|e| e.path().display().to_string())
+        .collect();
+    extra.sort();
+    out.extend(extra);
+    out
+}
+
 /// Environment variables of the runner's passed on to bots (all others are cleared).
 const PASSED_ENV: &[&str] = &["LANG", "LC_ALL", "TZ"];
 
@@ -304,8 +329,8 @@ pub fn describe(runtimes: &[Runtime]) -> Vec<(String, String)> {
             Err(_) => {}
         }
     }
-    for f in ETC_FILES {
-        if Path::new(f).exists() {
+    for f in etc_entries() {
+        if Path::new(&f).exists() {
             out.push((
                 f.to_string(),
                 "what a runtime needs of /etc, read-only".into(),
@@ -426,7 +451,8 @@ pub fn bwrap_args(
             Err(_) => {}
         }
     }
-    for f in ETC_FILES {
+    let etc = etc_entries();
+    for f in &etc {
         push(&[&"--ro-bind-try", f, f]);
     }
     // /proc/sys read-only, whoever the bot runs as: a second wall beside the uid drop
@@ -485,7 +511,7 @@ pub fn bwrap_args(
     // bubblewrap makes the folders above a mount point for root only (0700): open them
     // to the match's uid, which must reach the runtimes (e.g. /root/.pyenv) and /etc.
     let mut parents: Vec<PathBuf> = Vec::new();
-    let dests = ETC_FILES
+    let dests = etc
         .iter()
         .map(PathBuf::from)
         .chain(runtimes.iter().map(|r| mount_point(&r.prefix)))

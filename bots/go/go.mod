@@ -1,0 +1,3 @@
+module mazebot
+
+go 1.19
