@@ -1,7 +1,9 @@
 # mazearena server image: the release binary, bubblewrap (every bot runs in its sandbox),
-# plus Python 3 and Node.js so that uploaded bots and the starter bots can run, and gcc,
-# g++ and make so that C and C++ sources uploaded with a `build` command can be built (add a Rust
-# toolchain here to build Rust sources on the server).
+# plus Python 3 with numpy, pandas and scipy (what published robot.py solutions import)
+# and Node.js so that uploaded bots and the starter bots can run, and gcc, g++ and make so
+# that C and C++ sources uploaded with a `build` command can be built (add a Rust
+# toolchain, golang-go or a JDK here to build those on the server). GET /api/runtimes
+# lists what the image offers bots.
 
 FROM rust:1-bookworm AS build
 WORKDIR /src
@@ -13,7 +15,7 @@ RUN cargo build --release --locked
 
 FROM debian:bookworm-slim
 RUN apt-get update \
-    && apt-get install -y --no-install-recommends python3 nodejs tini ca-certificates bubblewrap gcc g++ make libc6-dev \
+    && apt-get install -y --no-install-recommends python3 python3-numpy python3-pandas python3-scipy nodejs tini ca-certificates bubblewrap gcc g++ make libc6-dev \
     && rm -rf /var/lib/apt/lists/* \
     && useradd --system --create-home --home-dir /var/lib/mazearena mazearena \
     && mkdir -p /var/lib/mazearena/db /var/lib/mazearena/bots \

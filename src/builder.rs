@@ -171,16 +171,19 @@ impl Builder {
             }
         }
         tracing::info!(bot_version_id = version.bot_version_id, %command, "building");
-        let (ok, mut log) = match build::build_logged(&command, &area, &self.sandbox).await {
-            Ok(o) => {
-                let mut log = o.log;
-                if !o.ok {
-                    log.push_str(&format!("\n[build {}]", o.status));
+        let (ok, mut log) =
+            match build::build_logged(&command, &area, &self.sandbox, version.runtime.as_deref())
+                .await
+            {
+                Ok(o) => {
+                    let mut log = o.log;
+                    if !o.ok {
+                        log.push_str(&format!("\n[build {}]", o.status));
+                    }
+                    (o.ok, log)
                 }
-                (o.ok, log)
-            }
-            Err(e) => (false, e.to_string()),
-        };
+                Err(e) => (false, e.to_string()),
+            };
         if !ok {
             return Ended::Done { built: None, log };
         }

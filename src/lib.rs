@@ -18,7 +18,9 @@
 //! - [`botfiles`]: safe unpacking of uploaded bots; [`manifest`]: `bot.toml` files.
 //! - [`metrics`]: Prometheus metrics.
 //! - [`web`]: HTML: the replay viewer and the server's pages (pure rendering).
-//! - [`cli`]: the `mazearena` command line (run, replay, match, maze, serve, tournament).
+//! - [`cli`]: the `mazearena` command line (run, replay, match, maze, serve, tournament,
+//!   and the client commands: login, submit, status, matches, logs, practice).
+//! - [`client`]: the HTTP client of a server that those client commands use.
 //!
 //! Dependencies point inwards: `engine` <- `protocol` <- `runner` <- `storage` <-
 //! `registry` <- `worker` <- `api`, `cli`.
@@ -27,6 +29,7 @@ pub mod api;
 pub mod botfiles;
 pub mod builder;
 pub mod cli;
+pub mod client;
 pub mod competition;
 pub mod engine;
 pub mod manifest;

@@ -44,6 +44,10 @@ pub struct BotManifest {
     /// Environment variables for the bot (the only ones of ours it gets).
     #[serde(default)]
     pub env: std::collections::BTreeMap<String, String>,
+    /// The server's runtime to put first on the bot's `PATH`, by name (one that
+    /// `GET /api/runtimes` lists, e.g. a venv with numpy); `mazearena submit` sends it.
+    #[serde(default)]
+    pub runtime: Option<String>,
     /// The folder (where the manifest is); filled in when loading.
     #[serde(skip)]
     pub dir: PathBuf,
@@ -53,7 +57,7 @@ pub struct BotManifest {
 #[serde(untagged)]
 enum ManifestFile {
     Many { bot: Vec<BotManifest> },
-    One(BotManifest),
+    One(Box<BotManifest>),
 }
 
 /// Why a manifest could not be used.
@@ -96,7 +100,7 @@ pub fn parse(text: &str, dir: &Path, path: &Path) -> Result<Vec<BotManifest>, Ma
     })?;
     let mut bots = match file {
         ManifestFile::Many { bot } => bot,
-        ManifestFile::One(b) => vec![b],
+        ManifestFile::One(b) => vec![*b],
     };
     if bots.is_empty() {
         return Err(invalid("the manifest lists no bot".into()));

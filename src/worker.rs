@@ -422,6 +422,7 @@ impl Worker {
             .map_or_else(|| PathBuf::from(&job.dir), |f| f.dir.clone());
         let mut bot = BotSpec::new(job.command.clone(), dir);
         bot.env = crate::storage::bots::env_pairs(&job.env);
+        bot.runtime.clone_from(&job.runtime);
         // A competition's matches play under its own limits.
         let job_limits = job
             .limits

@@ -24,6 +24,7 @@ pub(super) fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(get_entrant))
         .routes(routes!(rotate_key))
         .routes(routes!(get_registration, set_registration))
+        .routes(routes!(get_me))
 }
 
 /// A new entrant.
@@ -73,6 +74,68 @@ pub struct EntrantBot {
     pub bot_id: i64,
     /// Name.
     pub name: String,
+}
+
+/// Who a key is and what it acts for.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MeView {
+    /// `admin`, `organiser`, `entrant` (an entrant's key) or `owner` (a bot's owner
+    /// token).
+    pub kind: String,
+    /// The entrant, for an entrant's key.
+    pub entrant_id: Option<i64>,
+    /// The entrant's name.
+    pub entrant: Option<String>,
+    /// The bots the key acts for.
+    pub bots: Vec<EntrantBot>,
+}
+
+/// Who the caller's key is: the admin, an organiser, an entrant (with its bots) or a
+/// bot's owner (its bot). A key the server does not know: 401.
+#[utoipa::path(get, path = "/api/me", tag = "entrants", security(("bearer" = [])),
+    responses((status = 200, body = MeView), (status = 401, body = ErrorBody)))]
+async fn get_me(State(state): State<AppState>, caller: Caller) -> ApiResult<axum::Json<MeView>> {
+    let me = |kind: &str| MeView {
+        kind: kind.into(),
+        entrant_id: None,
+        entrant: None,
+        bots: Vec::new(),
+    };
+    let bots = |list: Vec<(i64, String)>| {
+        list.into_iter()
+            .map(|(bot_id, name)| EntrantBot { bot_id, name })
+            .collect::<Vec<_>>()
+    };
+    Ok(axum::Json(match &caller {
+        Caller::Anonymous => {
+            return Err(ApiError::Unauthorized(
+                "no key given (Authorization: Bearer KEY)".into(),
+            ));
+        }
+        Caller::Admin => me("admin"),
+        Caller::Organiser(_) => me("organiser"),
+        Caller::Token(hash) => {
+            if let Some(e) = state.storage.entrant_by_key(hash).await? {
+                MeView {
+                    kind: "entrant".into(),
+                    entrant_id: Some(e.entrant_id),
+                    entrant: Some(e.name),
+                    bots: bots(state.storage.bots_owned_by(hash).await?),
+                }
+            } else {
+                let owned = state.storage.bots_owned_by(hash).await?;
+                if owned.is_empty() {
+                    return Err(ApiError::Unauthorized(
+                        "this key is not known on this server".into(),
+                    ));
+                }
+                MeView {
+                    bots: bots(owned),
+                    ..me("owner")
+                }
+            }
+        }
+    }))
 }
 
 /// A replaced key.

@@ -6,7 +6,8 @@
 //! otherwise print, time or act out the layout it sensed.
 
 use axum::extract::State;
-use axum::http::StatusCode;
+use axum::http::{HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use utoipa::ToSchema;
@@ -18,14 +19,18 @@ use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
 use super::lists::{MatchListQuery, MatchPage, next_before};
 use super::mazes::{find_maze, hidden_error};
+use crate::runner::MatchRecord;
 use crate::storage::bots::build_status;
 use crate::storage::matches::MatchRow;
+use crate::storage::mazes::MazeRow;
+use crate::web::viewer::ViewerData;
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
         .routes(routes!(create_match, list_matches))
         .routes(routes!(get_match))
         .routes(routes!(get_match_replay))
+        .routes(routes!(get_match_replay_html))
         .routes(routes!(get_match_log))
 }
 
@@ -351,7 +356,28 @@ async fn get_match_replay(
     caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<ReplayView>> {
-    let row = find_match(&state, &caller, id).await?;
+    let (row, record, maze, stderr_shown) = replay_parts(&state, &caller, id).await?;
+    Ok(axum::Json(ReplayView {
+        match_id: id,
+        status: row.status.to_string(),
+        maze_id: maze.maze_id,
+        maze_dim: maze.dim,
+        maze_layout: (!maze.hidden || caller.is_admin()).then_some(maze.layout),
+        trace: serde_json::to_value(&record.trace).unwrap_or(Value::Array(vec![])),
+        stderr_shown,
+    }))
+}
+
+/// A played match's record as `caller` may see it, with its maze, and whether the
+/// bot's stderr is in it: a hidden maze's replay is the admin's only (it would show the
+/// maze); a removed trace or a match not played yet is a 409; the stderr is left out
+/// for all but the bot's owner and the admin.
+async fn replay_parts(
+    state: &AppState,
+    caller: &Caller,
+    id: i64,
+) -> ApiResult<(MatchRow, MatchRecord, MazeRow, bool)> {
+    let row = find_match(state, caller, id).await?;
     if row.maze_hidden && !caller.is_admin() {
         let msg = format!(
             "match {id} was played on a hidden (ranking) maze: its replay would show the maze, \
@@ -378,22 +404,52 @@ async fn get_match_replay(
             ))
         })?;
     // The bot's stderr is its owner's: left out for everyone else, public maze or not.
-    let stderr_shown = caller.owns(&state, row.bot_id).await?;
+    let stderr_shown = caller.owns(state, row.bot_id).await?;
     let record = if stderr_shown {
         record
     } else {
         record.without_stderr()
     };
-    let maze = find_maze(&state, row.maze_id).await?;
-    Ok(axum::Json(ReplayView {
-        match_id: id,
-        status: row.status.to_string(),
-        maze_id: maze.maze_id,
-        maze_dim: maze.dim,
-        maze_layout: (!maze.hidden || caller.is_admin()).then_some(maze.layout),
-        trace: serde_json::to_value(&record.trace).unwrap_or(Value::Array(vec![])),
-        stderr_shown,
-    }))
+    let maze = find_maze(state, row.maze_id).await?;
+    Ok((row, record, maze, stderr_shown))
+}
+
+/// The replay as one HTML file that opens from disk (the viewer with the match inside),
+/// sent as a download; the same checks as the replay.
+#[utoipa::path(get, path = "/api/matches/{id}/replay.html", tag = "matches",
+    params(("id" = i64, Path, description = "match id")),
+    responses(
+        (status = 200, content_type = "text/html", body = String),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody, description = "not played yet"),
+    ))]
+async fn get_match_replay_html(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(id): AppPath<i64>,
+) -> ApiResult<Response> {
+    let (row, record, maze, _) = replay_parts(&state, &caller, id).await?;
+    let shown = crate::engine::mazefile::parse(maze.layout.as_bytes()).ok();
+    let title = format!(
+        "{} v{} on {} (seed {})",
+        row.bot_name, row.version, row.maze_name, row.seed
+    );
+    let data = ViewerData::new(title, &record, shown.as_ref(), format!("match-{id}.json"));
+    let mut response = crate::web::viewer::standalone(&data).into_response();
+    let headers = response.headers_mut();
+    headers.insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("text/html; charset=utf-8"),
+    );
+    if let Ok(v) = HeaderValue::from_str(&format!("attachment; filename=\"match-{id}.html\"")) {
+        headers.insert(header::CONTENT_DISPOSITION, v);
+    }
+    for (name, value) in crate::web::policy::headers() {
+        if let Ok(v) = HeaderValue::from_str(&value) {
+            headers.insert(name, v);
+        }
+    }
+    Ok(response)
 }
 
 /// The bot's stderr tail and failure details (the bot's owner or the admin; a hidden

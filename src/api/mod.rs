@@ -132,6 +132,8 @@ pub struct AppState {
     pub wake: Arc<Notify>,
     /// Ranks standings with their uncertainty, keeping the last tables.
     pub ranker: Arc<crate::registry::rankings::Ranker>,
+    /// The runtimes bots may use here (found at start-up).
+    pub runtimes: Arc<Vec<crate::runner::runtimes::RuntimeInfo>>,
 }
 
 /// The OpenAPI document's header; paths come from the handlers.

@@ -19,6 +19,18 @@ pub(super) fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(healthz))
         .routes(routes!(metrics))
         .routes(routes!(openapi_json))
+        .routes(routes!(runtimes))
+}
+
+/// The runtimes bots may use on this server: the operator's (`--runtime DIR`, each by
+/// the name a bot gives as `runtime` to have it first on its `PATH`) and the system's,
+/// with their programs' versions and installed packages.
+#[utoipa::path(get, path = "/api/runtimes", tag = "system",
+    responses((status = 200, body = [crate::runner::runtimes::RuntimeInfo])))]
+async fn runtimes(
+    State(state): State<AppState>,
+) -> axum::Json<Vec<crate::runner::runtimes::RuntimeInfo>> {
+    axum::Json(state.runtimes.as_ref().clone())
 }
 
 /// Health of the server.

@@ -1,6 +1,7 @@
 //! The `mazearena` command line: one file per subcommand, each a thin layer over the
 //! engine and the runner.
 
+mod client;
 mod competition;
 mod matches;
 mod maze;
@@ -55,6 +56,21 @@ pub enum Command {
     /// Competitions: create from a file, export, edit, list, results, organiser keys.
     #[command(subcommand)]
     Competition(competition::CompetitionCommand),
+    /// Log in to a server: check your key there, and keep the server and the key.
+    Login(client::LoginArgs),
+    /// Forget the server, the key and the tokens of bots registered from here.
+    Logout,
+    /// Upload a bot's folder (its bot.toml) as a new bot or a new version, and follow
+    /// its build.
+    Submit(client::SubmitArgs),
+    /// Your bots on the server: versions, builds, ranks, and your competitions' quotas.
+    Status(client::StatusArgs),
+    /// Your bots' latest matches on the server.
+    Matches(client::MatchesArgs),
+    /// A match's log from the server: status, reason, the bot's stderr.
+    Logs(client::LogsArgs),
+    /// Play your bot's latest version on every practice maze and print the results.
+    Practice(client::PracticeArgs),
 }
 
 /// A step of the sandbox, when this process was started as `mazearena sandbox-exec ...`
@@ -91,6 +107,13 @@ pub fn run() -> anyhow::Result<()> {
         Command::Match(cmd) => matches::run(cmd),
         Command::Prune(args) => prune::run(args),
         Command::Competition(cmd) => competition::run(cmd),
+        Command::Login(args) => client::login(args),
+        Command::Logout => client::logout(),
+        Command::Submit(args) => client::submit(args),
+        Command::Status(args) => client::status(args),
+        Command::Matches(args) => client::matches(args),
+        Command::Logs(args) => client::logs(args),
+        Command::Practice(args) => client::practice(args),
     }
 }
 

@@ -18,7 +18,8 @@ const MAX_REPLAY_BYTES: usize = 64 * 1024 * 1024;
 /// Arguments of `mazearena replay`.
 #[derive(Debug, Args)]
 pub struct ReplayArgs {
-    /// The replay file (JSON).
+    /// The replay file (JSON), or the id of a match on the server you are logged in to
+    /// (`mazearena login`), or `last` for your newest match there on a public maze.
     replay: PathBuf,
     /// Where to write the HTML (default: the replay's name with `.html`).
     #[arg(long, short = 'o')]
@@ -34,6 +35,18 @@ pub struct ReplayArgs {
 /// An unreadable or invalid replay or maze, a replay whose maze is not the one given,
 /// or an output that cannot be written.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
+    // A match id or `last` (and no file of that name): the server's replay.
+    let server_match = args
+        .replay
+        .to_str()
+        .filter(|s| !args.replay.exists() && super::client::is_match_spec(s));
+    if let Some(spec) = server_match {
+        anyhow::ensure!(
+            args.maze.is_none(),
+            "--maze is for a replay file, not a match"
+        );
+        return super::client::replay(spec, args.output);
+    }
     let bytes = super::read_capped(&args.replay, MAX_REPLAY_BYTES)?;
     anyhow::ensure!(
         bytes.len() <= MAX_REPLAY_BYTES,

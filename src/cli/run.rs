@@ -111,6 +111,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         dir,
         env: args.bot_env.clone(),
         echo_stderr: args.verbose,
+        runtime: None,
     };
     // One core for the referee and the bot (runner::affinity): the one we are on.
     crate::runner::affinity::pin_to_this_core();

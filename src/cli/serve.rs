@@ -230,6 +230,11 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     }
 
     let admin_token = admin_token(args.admin_token.as_deref(), &data_dir)?;
+    let offered = match &sandbox {
+        crate::runner::Sandbox::Full(f) => f.runtimes.clone(),
+        crate::runner::Sandbox::None => Vec::new(),
+    };
+    let runtimes = Arc::new(crate::runner::runtimes::probe(&offered).await);
     let jobs = args.pool.jobs(0);
     let metrics = Metrics::new();
     let wake = Arc::new(Notify::new());
@@ -249,6 +254,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         metrics: metrics.clone(),
         wake: wake.clone(),
         ranker: Default::default(),
+        runtimes,
     };
 
     let listener = TcpListener::bind(&args.bind)

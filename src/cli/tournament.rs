@@ -101,7 +101,12 @@ pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
         if built.insert((b.dir.clone(), cmd.clone())) {
             eprintln!("building {} ({cmd})", b.name);
             runtime
-                .block_on(runner::build::build(cmd, &b.dir, &sandbox))
+                .block_on(runner::build::build(
+                    cmd,
+                    &b.dir,
+                    &sandbox,
+                    b.runtime.as_deref(),
+                ))
                 .with_context(|| format!("{}: the build failed", b.name))?;
         }
     }

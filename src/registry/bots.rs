@@ -34,6 +34,8 @@ pub struct Submission {
     pub env: Vec<(String, String)>,
     /// The files.
     pub files: BotFiles,
+    /// The server's runtime to put first on the bot's `PATH`, by name.
+    pub runtime: Option<String>,
 }
 
 /// A registered bot: its first version and its owner token (shown this once).
@@ -179,6 +181,7 @@ pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64>
         build_command: None,
         env: &env,
         bundle_sha256: None,
+        runtime: bot.runtime.as_deref(),
     };
     if let Some(existing) = storage.get_bot_by_name(&bot.name).await? {
         let latest = storage
@@ -199,6 +202,7 @@ pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64>
             && latest.dir == dir
             && latest.command == bot.command
             && latest.env_pairs() == env
+            && latest.runtime == bot.runtime
             && latest.bundle_sha256.is_none();
         if same {
             return Ok(latest.bot_version_id);
@@ -229,6 +233,7 @@ fn stored_version<'a>(submission: &'a Submission, summary: &'a BundleSummary) ->
         build_command: submission.build.as_deref(),
         env: &submission.env,
         bundle_sha256: Some(&summary.sha256),
+        runtime: submission.runtime.as_deref(),
     }
 }
 
@@ -247,6 +252,7 @@ mod tests {
             command: "python3 bot.py".into(),
             build: None,
             env: vec![],
+            runtime: None,
             files: BotFiles::Map(
                 files
                     .iter()
@@ -293,6 +299,7 @@ mod tests {
             report: None,
             claimed: BTreeMap::new(),
             env: BTreeMap::new(),
+            runtime: None,
             dir: folder.path().to_path_buf(),
         };
         let id = register_local(&db, &manifest).await.unwrap();

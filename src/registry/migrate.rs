@@ -123,6 +123,7 @@ mod tests {
                     build_command: build,
                     env: &[],
                     bundle_sha256: None,
+                    runtime: None,
                 },
             )
             .await
@@ -160,6 +161,7 @@ mod tests {
                         build_command: None,
                         env: &[],
                         bundle_sha256: None,
+                        runtime: None,
                     },
                 )
                 .await

@@ -234,13 +234,19 @@ pub struct BuildOutcome {
 }
 
 /// Runs `command` in `dir` (in place, as the runner's user) under `sandbox`, waiting at
-/// most [`BUILD_TIMEOUT`], its writes bounded by [`DEFAULT_BUILD_WRITE_BYTES`].
+/// most [`BUILD_TIMEOUT`], its writes bounded by [`DEFAULT_BUILD_WRITE_BYTES`]; the
+/// runtime named `runtime` first on its `PATH`.
 ///
 /// # Errors
 /// [`BuildError`] when it cannot run, fails or takes too long.
-pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), BuildError> {
+pub async fn build(
+    command: &str,
+    dir: &Path,
+    sandbox: &Sandbox,
+    runtime: Option<&str>,
+) -> Result<(), BuildError> {
     let area = BuildArea::in_place(dir, DEFAULT_BUILD_WRITE_BYTES);
-    let outcome = build_logged(command, &area, sandbox).await?;
+    let outcome = build_logged(command, &area, sandbox, runtime).await?;
     if outcome.ok {
         return Ok(());
     }
@@ -266,8 +272,9 @@ pub async fn build(command: &str, dir: &Path, sandbox: &Sandbox) -> Result<(), B
 
 /// Runs `command` in `area` under `sandbox` with the build limits (time
 /// [`BUILD_TIMEOUT`], memory [`BUILD_MEMORY_BYTES`] where a cgroup can be made, the
-/// area's bound on what it writes, output kept to its last [`BUILD_LOG_BYTES`]), and
-/// returns how it ended with its output.
+/// area's bound on what it writes, output kept to its last [`BUILD_LOG_BYTES`]), the
+/// runtime named `runtime` first on its `PATH`, and returns how it ended with its
+/// output.
 ///
 /// # Errors
 /// [`BuildError`] only when it cannot be started at all.
@@ -275,6 +282,7 @@ pub async fn build_logged(
     command: &str,
     area: &BuildArea,
     sandbox: &Sandbox,
+    runtime: Option<&str>,
 ) -> Result<BuildOutcome, BuildError> {
     let dir = area.work();
     let words = shlex::split(command)
@@ -299,7 +307,9 @@ pub async fn build_logged(
                 chown_tree(dir, lease.uid()).map_err(spawn_err)?;
                 uid = Some(lease);
             }
-            let runtimes = full.runtimes_for(&words[0], dir).map_err(sandbox_err)?;
+            let runtimes = full
+                .runtimes_for(&words[0], dir, runtime)
+                .map_err(sandbox_err)?;
             let args = super::sandbox::bwrap_args(
                 full,
                 Some(dir),

@@ -13,6 +13,7 @@ pub mod build;
 pub mod framing;
 pub mod outcome;
 pub mod process;
+pub mod runtimes;
 pub mod sandbox;
 pub mod session;
 pub mod trace;
@@ -63,6 +64,8 @@ pub struct BotSpec {
     pub env: Vec<(String, String)>,
     /// Print the bot's stderr lines on ours as they come (`mazearena run --verbose`).
     pub echo_stderr: bool,
+    /// The runtime to put first on the bot's `PATH`, by name (one of the sandbox's).
+    pub runtime: Option<String>,
 }
 
 impl BotSpec {
@@ -150,6 +153,7 @@ pub async fn run_match(
         scratch_bytes: limits.scratch_mb << 20,
         sandbox,
         env: &bot.env,
+        runtime: bot.runtime.as_deref(),
     };
     let mut session = match Session::start(&launch, limits, bot.echo_stderr) {
         Ok(s) => s,

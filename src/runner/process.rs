@@ -55,6 +55,8 @@ pub struct Launch<'a> {
     pub sandbox: &'a Sandbox,
     /// Variables declared for the bot (checked by [`super::botenv::check`]).
     pub env: &'a [(String, String)],
+    /// The runtime to put first on its `PATH`, by name ([`super::runtimes::name_of`]).
+    pub runtime: Option<&'a str>,
 }
 
 /// Why a bot could not be started.
@@ -128,7 +130,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 .transpose()
                 .map_err(LaunchError::Sandbox)?;
             let runtimes = full
-                .runtimes_for(&words[0], launch.dir)
+                .runtimes_for(&words[0], launch.dir, launch.runtime)
                 .map_err(LaunchError::Sandbox)?;
             let cgroup = match &full.cgroups {
                 Ok(root) => Some(
@@ -398,6 +400,7 @@ mod tests {
             scratch_bytes: 1 << 20,
             sandbox: &none,
             env: &[],
+            runtime: None,
         };
         for bad in ["", "   ", "python3 'unterminated"] {
             assert!(
@@ -429,6 +432,7 @@ mod tests {
             scratch_bytes: 1 << 20,
             sandbox: &none,
             env: &[],
+            runtime: None,
         })
         .unwrap();
         let pid = bot.pid.unwrap();

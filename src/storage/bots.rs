@@ -75,6 +75,8 @@ pub struct BotVersionRow {
     /// How many times its build has been claimed (a claim whose worker died counts).
     #[sqlx(default)]
     pub build_attempts: i64,
+    /// The runtime it wants first on its `PATH`, by name (`GET /api/runtimes`).
+    pub runtime: Option<String>,
 }
 
 impl BotVersionRow {
@@ -129,6 +131,8 @@ pub struct NewVersion<'a> {
     pub build_command: Option<&'a str>,
     /// Declared environment variables (checked by `runner::botenv::check`).
     pub env: &'a [(String, String)],
+    /// The runtime it wants first on its `PATH`, by name.
+    pub runtime: Option<&'a str>,
 }
 
 const BOT_WITH_LATEST: &str =
@@ -277,6 +281,20 @@ impl Storage {
         )
     }
 
+    /// The bots (id, name) whose owner token or entrant's key has hash `token_hash`, by id.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn bots_owned_by(&self, token_hash: &str) -> Result<Vec<(i64, String)>> {
+        Ok(sqlx::query_as(
+            "select b.bot_id, b.name from bot b left join entrant e on e.entrant_id = b.entrant_id
+             where b.owner_token_hash = $1 or e.key_hash = $1 order by b.bot_id",
+        )
+        .bind(token_hash)
+        .fetch_all(self.pool())
+        .await?)
+    }
+
     /// Whether `token_hash` is the hash of `bot_id`'s owner token or of the key of the
     /// entrant it belongs to.
     ///
@@ -355,9 +373,9 @@ async fn insert_version(
     };
     Ok(sqlx::query_as(
         "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at,
-             build_command, build_status, env, bundle_sha256)
+             build_command, build_status, env, bundle_sha256, runtime)
          values ($1, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = $2), $3, $4, $5, $6, $7,
-             $8, $9, $10, $11)
+             $8, $9, $10, $11, $12)
          returning *",
     )
     .bind(bot_id)
@@ -371,6 +389,7 @@ async fn insert_version(
     .bind(status)
     .bind(env_json(new.env))
     .bind(new.bundle_sha256)
+    .bind(new.runtime)
     .fetch_one(tx)
     .await?)
 }
@@ -389,6 +408,7 @@ mod tests {
             build_command: None,
             env: &[],
             bundle_sha256: None,
+            runtime: None,
         }
     }
 

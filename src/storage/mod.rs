@@ -484,6 +484,7 @@ pub(crate) mod test_support {
             build_command: None,
             env: &[],
             bundle_sha256: None,
+            runtime: None,
         }
     }
 
@@ -497,6 +498,7 @@ pub(crate) mod test_support {
             build_command: Some("make"),
             env: &[],
             bundle_sha256: None,
+            runtime: None,
         }
     }
 

@@ -264,6 +264,7 @@ mod tests {
                         build_command: None,
                         env: &[],
                         bundle_sha256: None,
+                        runtime: None,
                     },
                 )
                 .await
@@ -286,6 +287,7 @@ mod tests {
                 build_command: None,
                 env: &[],
                 bundle_sha256: None,
+                runtime: None,
             };
             db.add_bot_version(bot_id, &v2).await.unwrap();
             let bot = db.get_bot(bot_id).await.unwrap().unwrap();

@@ -836,6 +836,7 @@ async fn the_openapi_document_lists_every_route() {
         ("/api/matches", vec!["get", "post"]),
         ("/api/matches/{id}", vec!["get"]),
         ("/api/matches/{id}/replay", vec!["get"]),
+        ("/api/matches/{id}/replay.html", vec!["get"]),
         ("/api/matches/{id}/log", vec!["get"]),
         ("/api/tournaments", vec!["get", "post"]),
         ("/api/tournaments/{id}", vec!["get"]),
@@ -844,6 +845,7 @@ async fn the_openapi_document_lists_every_route() {
         ("/api/entrants/{id}", vec!["get"]),
         ("/api/entrants/{id}/key", vec!["post"]),
         ("/api/registration", vec!["get", "put"]),
+        ("/api/me", vec!["get"]),
         ("/api/organisers", vec!["post"]),
         ("/api/competitions", vec!["get", "post"]),
         ("/api/competitions/{name}", vec!["get", "patch"]),
@@ -853,6 +855,7 @@ async fn the_openapi_document_lists_every_route() {
         ("/api/competitions/{name}/selection", vec!["put"]),
         ("/api/competitions/{name}/results", vec!["get"]),
         ("/api/competitions/{name}/results.csv", vec!["get"]),
+        ("/api/runtimes", vec!["get"]),
         ("/healthz", vec!["get"]),
         ("/metrics", vec!["get"]),
         ("/api/openapi.json", vec!["get"]),
@@ -1202,6 +1205,13 @@ async fn an_owner_gets_no_replay_or_stderr_of_a_hidden_maze_match() {
         v["error"]["message"].as_str().unwrap().contains("hidden"),
         "{v}"
     );
+    // Nor as one HTML file, for anyone but the admin.
+    for (caller, status) in [(Some(token.as_str()), 403), (None, 401), (Some(ADMIN), 200)] {
+        let (s, body, _) = server
+            .get_raw(&format!("/api/matches/{id}/replay.html"), caller)
+            .await;
+        assert_eq!(s, status, "{body}");
+    }
     // Anonymous callers: the match view, nothing else.
     let (s, v) = server.get(&format!("/api/matches/{id}/replay"), None).await;
     assert_error(s, &v, 401);

@@ -322,6 +322,10 @@ async fn play_a_competition(server: &TestServer) {
             .get(&format!("/api/matches/{private_match}/replay"), token)
             .await;
         assert_eq!(s, 404);
+        let (s, _, _) = server
+            .get_raw(&format!("/api/matches/{private_match}/replay.html"), token)
+            .await;
+        assert_eq!(s, 404);
     }
     for page in [
         format!("/matches/{private_match}"),

@@ -170,6 +170,7 @@ async fn a_server_applies_an_uploaded_bots_variables_only_to_the_bot() {
     assert_eq!(status, 200);
 }
 
+/// Queues a match of `bot` on classic maze 01 (stored as a public maze the first time).
 async fn queue_on_a_public_maze(server: &TestServer, bot: i64, token: &str) -> i64 {
     let layout = std::fs::read_to_string(shared_maze("classic/test_maze_01.txt")).unwrap();
     let (s, v) = server
@@ -179,8 +180,20 @@ async fn queue_on_a_public_maze(server: &TestServer, bot: i64, token: &str) -> i
             Some(crate::support::ADMIN),
         )
         .await;
-    assert_eq!(s, 201, "{v}");
-    crate::support::queue(server, bot, v["maze_id"].as_i64().unwrap(), 1, token).await
+    let maze = match s {
+        201 => v["maze_id"].as_i64().unwrap(),
+        409 => {
+            let (_, all) = server.get("/api/mazes", None).await;
+            all.as_array()
+                .unwrap()
+                .iter()
+                .find(|m| m["name"].as_str().is_some_and(|n| n.starts_with("c1-")))
+                .and_then(|m| m["maze_id"].as_i64())
+                .expect("the classic maze stored before")
+        }
+        _ => panic!("{v}"),
+    };
+    crate::support::queue(server, bot, maze, 1, token).await
 }
 
 /// A home folder with `bin/` (to put on PATH) and a planted `.ssh/id_rsa`.
@@ -367,12 +380,65 @@ async fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_ru
     if without["status"] != "finished" {
         assert!(stderr(&without).contains("numpy"), "{without}");
     }
-    // On a server, where the operator lists the venv: the same robot, uploaded, named
-    // by the venv's absolute path, plays to the same score.
+    // On a server, where the operator lists the venv after another without numpy:
+    // the same robot, uploaded, named by the venv's absolute path, plays to the same
+    // score; so does one that names the venv as its runtime and calls a bare python3.
+    let plain_venv = dir.path().join("plain");
+    let made = Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&plain_venv)
+        .output()
+        .unwrap();
+    assert!(made.status.success(), "{made:?}");
     let tmp = tempfile::tempdir().unwrap();
     let server = TestServer::start(
         tmp.path(),
-        &["--jobs", "1", "--runtime", venv.to_str().unwrap()],
+        &[
+            "--jobs",
+            "1",
+            "--runtime",
+            plain_venv.to_str().unwrap(),
+            "--runtime",
+            venv.to_str().unwrap(),
+        ],
+    );
+    // The server says what it offers: both venvs (numpy in one), and the system's.
+    let (_, offered) = server.get("/api/runtimes", None).await;
+    let names: Vec<&str> = offered
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    // The two venvs in the operator's order (their base interpreter, which they bring,
+    // after them), the system's last.
+    let at = |n: &str| names.iter().position(|x| *x == n);
+    assert!(at("plain") < at("sci") && at("sci").is_some(), "{names:?}");
+    assert_eq!(names.last(), Some(&"system"), "{names:?}");
+    let sci = &offered[at("sci").unwrap()];
+    // No path of the server's in what it says.
+    assert!(!offered.to_string().contains("/tmp/"), "{offered}");
+    assert!(
+        sci["packages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["name"] == "numpy"),
+        "{sci}"
+    );
+    assert!(
+        sci["programs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["program"] == "python3"
+                && p["version"].as_str().unwrap().starts_with("Python 3")),
+        "{sci}"
+    );
+    let (_, home) = server.get_text("/").await;
+    assert!(
+        home.contains("Runtimes for bots") && home.contains("numpy"),
+        "the home page lists them"
     );
     let read = |f: &str| std::fs::read_to_string(root().join(f)).unwrap();
     let (bot, token) = crate::support::register(
@@ -391,6 +457,56 @@ async fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_ru
     assert_eq!(m["status"], "finished", "{m}");
     let seeded = run_in(root(), &with_numpy, &["--seed", "1"], &[]);
     assert_eq!(m["score"], seeded["score"], "{m}");
+    let files = json!({
+        "udacity_adapter.py": read("bots/python/udacity_adapter.py"),
+        "robot.py": read("tests/fixtures/robot_py/robot.py"),
+        "numpy_robot.py": read("tests/fixtures/robot_py/numpy_robot.py"),
+    });
+    let bare = "python3 udacity_adapter.py numpy_robot.py";
+    let (named, named_token) = crate::support::upload(
+        &server,
+        json!({"name": "named-runtime", "command": bare, "runtime": "sci", "files": files}),
+    )
+    .await;
+    let id = queue_on_a_public_maze(&server, named, &named_token).await;
+    let m = wait_match(&server, id).await;
+    assert_eq!(
+        (&m["status"], &m["score"]),
+        (&json!("finished"), &seeded["score"]),
+        "{m}"
+    );
+    // Without naming it, the bare python3 is the first runtime's: no numpy there.
+    let (unnamed, unnamed_token) = crate::support::upload(
+        &server,
+        json!({"name": "unnamed-runtime", "command": bare, "files": files}),
+    )
+    .await;
+    let id = queue_on_a_public_maze(&server, unnamed, &unnamed_token).await;
+    let m = wait_match(&server, id).await;
+    assert_eq!(m["status"], "crashed", "{m}");
+    let (_, log) = server
+        .get(&format!("/api/matches/{id}/log"), Some(&unnamed_token))
+        .await;
+    assert!(
+        log["stderr_tail"].as_str().unwrap().contains("numpy"),
+        "{log}"
+    );
+    // A runtime the server does not offer: refused with those it offers.
+    let (s, v) = server
+        .post(
+            "/api/bots",
+            json!({"name": "no-such-runtime", "command": bare, "runtime": "nope", "files": files}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 422, "{v}");
+    let msg = v["error"]["message"].as_str().unwrap();
+    assert!(
+        msg.contains("no runtime named \"nope\"")
+            && msg.contains("it offers plain, ")
+            && msg.contains("sci"),
+        "{msg}"
+    );
 }
 
 /// Uploads a bot whose build is `build`; returns the ended version's view, its build

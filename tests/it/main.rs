@@ -5,6 +5,7 @@ mod authors;
 mod bots;
 mod browser;
 mod cli;
+mod client;
 mod competitions;
 mod connections;
 mod contain;

@@ -343,6 +343,39 @@ async fn the_readme_competition_example_runs_as_written() {
         assert!(Instant::now() < deadline, "never ranked: {b}");
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
+    // A second entrant takes part with the client, as the README's walkthrough says.
+    let walkthrough = self::blocks("Take part from the command line");
+    assert_eq!(walkthrough.len(), 1, "{walkthrough:?}");
+    let config = dir.path().join("client.toml");
+    let out = sh(
+        &work,
+        &format!(
+            "set -e\n{}",
+            walkthrough[0].replace("localhost:8080", &addr)
+        ),
+        &[("MAZEARENA_CONFIG", config.to_str().unwrap())],
+    );
+    assert!(
+        out.contains("logged in to")
+            && out.contains("version 1 is ready")
+            && out.contains("mean score"),
+        "{out}"
+    );
+    let html = std::fs::read_to_string(work.join("match.html")).unwrap();
+    assert!(html.contains("id=\"replay-data\""));
+    loop {
+        let (_, b) = server
+            .get("/api/competitions/class-2027/leaderboard", None)
+            .await;
+        if b["standings"].as_array().is_some_and(|r| r.len() == 2) {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the second entrant never ranked: {b}"
+        );
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
     // Closed now; the results come after the final run.
     run(&blocks[2]);
     loop {
@@ -471,4 +504,38 @@ fn a_kits_readme_runs_as_written(kit: &str, built: &str) {
         sh(&repo, block, &[]);
     }
     assert!(repo.join("bots").join(kit).join(built).exists(), "{kit}");
+}
+
+/// The README's numpy robot: a venv with numpy, and the adapter running a robot that
+/// imports it, as written (pip needs PyPI: outside CI, skipped with the reason if it
+/// cannot reach it).
+#[test]
+fn the_readme_numpy_robot_example_runs_as_written() {
+    let block = blocks("Testing a bot locally")
+        .into_iter()
+        .find(|b| b.contains("pip install"))
+        .expect("the numpy example");
+    let dir = tempfile::tempdir().unwrap();
+    for link in ["bots", "mazes", "tests"] {
+        std::os::unix::fs::symlink(root().join(link), dir.path().join(link)).unwrap();
+    }
+    let mut lines = block.lines();
+    let setup = lines.next().unwrap();
+    let made = Command::new("bash")
+        .args(["-c", setup])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    if !made.status.success() {
+        let why = String::from_utf8_lossy(&made.stderr).into_owned();
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true and the venv cannot be made: {why}"
+        );
+        eprintln!("SKIPPED the README's numpy example: {why}");
+        return;
+    }
+    let rest: Vec<&str> = lines.collect();
+    let out = sh(dir.path(), &rest.join("\n"), &[]);
+    assert!(out.contains("Task complete! Score:"), "{out}");
 }

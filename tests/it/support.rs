@@ -280,6 +280,22 @@ impl TestServer {
         (resp.status().as_u16(), resp.text().await.unwrap())
     }
 
+    /// GET with an optional token, returning status, body text and headers.
+    pub async fn get_raw(
+        &self,
+        path: &str,
+        token: Option<&str>,
+    ) -> (u16, String, reqwest::header::HeaderMap) {
+        let mut request = self.client.get(format!("{}{path}", self.base));
+        if let Some(t) = token {
+            request = request.bearer_auth(t);
+        }
+        let resp = request.send().await.expect("the server answers");
+        let status = resp.status().as_u16();
+        let headers = resp.headers().clone();
+        (status, resp.text().await.unwrap(), headers)
+    }
+
     /// GET returning status and JSON.
     pub async fn get(&self, path: &str, token: Option<&str>) -> (u16, serde_json::Value) {
         let (s, v, _) = self.call(reqwest::Method::GET, path, None, token).await;

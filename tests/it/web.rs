@@ -129,6 +129,28 @@ async fn drive_viewer(b: &Browser, trace: &[Value], what: &str) {
     b.click("#btn-run1").await;
     check_robot(b, trace, first_run1, what).await;
     b.screenshot(&format!("{what}-run1")).await;
+    // The legend stays in view: in a window shorter than the maze, with the maze's top
+    // at the window's top, the controls and the layers' legend sit at its bottom.
+    b.client.set_window_size(1000, 520).await.unwrap();
+    let seen = b
+        .client
+        .execute(
+            "const box = document.querySelector('#mv-maze-box');\
+             window.scrollTo(0, box.getBoundingClientRect().top + window.scrollY);\
+             const m = box.getBoundingClientRect();\
+             const r = document.querySelector('.mv-layers').getBoundingClientRect();\
+             return [m.bottom > window.innerHeight, r.top >= 0 && r.bottom <= window.innerHeight];",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(
+        seen,
+        serde_json::json!([true, true]),
+        "{what}: [the maze is taller than the window, the legend is in view]"
+    );
+    b.screenshot(&format!("{what}-legend-in-view")).await;
+    b.client.set_window_size(1300, 1100).await.unwrap();
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -291,6 +313,30 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
         .await;
     assert_eq!(own["stderr_shown"], true);
     assert!(own.to_string().contains("thinking about step 2"));
+    // The replay as one HTML file: the same, sent as a download under the pages' policy.
+    let (s, html, headers) = server
+        .get_raw(&format!("/api/matches/{tm}/replay.html"), None)
+        .await;
+    assert_eq!(s, 200);
+    assert!(html.contains("id=\"replay-data\"") && !html.contains("thinking about step"));
+    assert!(
+        headers["content-disposition"]
+            .to_str()
+            .unwrap()
+            .starts_with("attachment"),
+        "{headers:?}"
+    );
+    assert!(
+        headers.contains_key("content-security-policy"),
+        "{headers:?}"
+    );
+    let (_, html, _) = server
+        .get_raw(
+            &format!("/api/matches/{tm}/replay.html"),
+            Some(&talker_token),
+        )
+        .await;
+    assert!(html.contains("thinking about step 2"));
     b.open(&format!("{}/matches/{tm}#step=2", server.base), "#robot")
         .await;
     assert!(!b.source().await.contains("thinking about step"));

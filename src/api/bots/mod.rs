@@ -56,6 +56,10 @@ pub struct BotUpload {
     /// TMPDIR or `MAZEARENA_*`. (Form: repeated `env` fields `KEY=VALUE`.)
     #[serde(default)]
     pub env: Option<BTreeMap<String, String>>,
+    /// The server's runtime to put first on the bot's `PATH` (a name from
+    /// `GET /api/runtimes`, e.g. a venv with numpy). (Form: `runtime`.)
+    #[serde(default)]
+    pub runtime: Option<String>,
 }
 
 /// A stored version of a bot.
@@ -87,6 +91,8 @@ pub struct VersionView {
     /// The names of the environment variables declared for the bot (values are shown
     /// to nobody).
     pub env_names: Vec<String>,
+    /// The runtime it asked to have first on its `PATH` (`GET /api/runtimes`).
+    pub runtime: Option<String>,
 }
 
 /// Lines of a build log shown in a version's view.
@@ -106,6 +112,7 @@ impl From<BotVersionRow> for VersionView {
             build_status: v.build_status,
             built_at: v.built_at,
             build_log_tail: None,
+            runtime: v.runtime,
         }
     }
 }
@@ -224,6 +231,7 @@ async fn create_bot(
         }
     }
     let (name, submission) = read_upload(&state, request).await?.submission()?;
+    check_runtime(&state, submission.runtime.as_deref())?;
     let name = name.ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
     let registered =
         registry::bots::register(&state.storage, &name, submission, &state.settings.scratch())
@@ -286,11 +294,37 @@ async fn create_bot_version(
         }
     }
     let (_, submission) = read_upload(&state, request).await?.submission()?;
+    check_runtime(&state, submission.runtime.as_deref())?;
     let row =
         registry::bots::add_version(&state.storage, id, submission, &state.settings.scratch())
             .await?;
     state.wake.notify_waiters();
     Ok((StatusCode::CREATED, axum::Json(row.into())))
+}
+
+/// Refuses a runtime this server does not offer (422, with those it offers).
+fn check_runtime(state: &AppState, runtime: Option<&str>) -> ApiResult<()> {
+    let Some(name) = runtime else {
+        return Ok(());
+    };
+    let offered: Vec<&str> = state
+        .runtimes
+        .iter()
+        .filter(|r| r.kind == "operator")
+        .map(|r| r.name.as_str())
+        .collect();
+    if offered.contains(&name) {
+        return Ok(());
+    }
+    Err(ApiError::Unprocessable(format!(
+        "this server has no runtime named {name:?}: {} (GET /api/runtimes lists them; \
+         leave `runtime` out for the system's)",
+        if offered.is_empty() {
+            "it offers none besides the system's".to_string()
+        } else {
+            format!("it offers {}", offered.join(", "))
+        }
+    )))
 }
 
 /// List the bots with their latest version.

@@ -21,6 +21,7 @@ pub(super) struct Upload {
     pub env: Vec<(String, String)>,
     pub files: Option<BTreeMap<String, String>>,
     pub archive: Option<Vec<u8>>,
+    pub runtime: Option<String>,
 }
 
 pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult<Upload> {
@@ -45,12 +46,14 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
     if content_type.starts_with("multipart/form-data") {
         let mut form = Multipart::from_request(request, state).await?;
         let (mut name, mut command, mut archive, mut build) = (None, None, None, None);
+        let mut runtime = None;
         let mut env = Vec::new();
         while let Some(field) = form.next_field().await? {
             match field.name().unwrap_or("") {
                 "name" => name = Some(field.text().await?),
                 "command" => command = Some(field.text().await?),
                 "build" => build = Some(field.text().await?),
+                "runtime" => runtime = Some(field.text().await?),
                 "env" => {
                     let text = field.text().await?;
                     env.push(botenv::parse_assignment(&text).map_err(env_error)?);
@@ -58,7 +61,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "archive" => archive = Some(field.bytes().await?.to_vec()),
                 other => {
                     return Err(ApiError::BadRequest(format!(
-                        "unknown form field {other:?}: expected name, command, build, env, archive"
+                        "unknown form field {other:?}: expected name, command, build, env, runtime, archive"
                     )));
                 }
             }
@@ -71,6 +74,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 ApiError::Unprocessable("the form needs a `command` field".into())
             })?,
             files: None,
+            runtime,
             archive: Some(archive.ok_or_else(|| {
                 ApiError::Unprocessable("the form needs an `archive` file field".into())
             })?),
@@ -94,6 +98,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         env: body.env.unwrap_or_default().into_iter().collect(),
         files: body.files,
         archive,
+        runtime: body.runtime,
     })
 }
 
@@ -125,6 +130,7 @@ impl Upload {
                 build: self.build,
                 env: self.env,
                 files,
+                runtime: self.runtime.filter(|r| !r.trim().is_empty()),
             },
         ))
     }

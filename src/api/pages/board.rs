@@ -172,6 +172,7 @@ pub(super) async fn leaderboard_page(
         tabs,
         tournaments,
         mazes,
+        runtimes: state.runtimes.as_ref().clone(),
     })))
 }
 

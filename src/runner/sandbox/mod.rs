@@ -404,12 +404,32 @@ pub use view::{Runtime, Work, runtime_of_program};
 
 impl FullSandbox {
     /// The runtimes mounted for a bot or build whose program is `program`: the
-    /// operator's, and on local runs the one the program comes from.
+    /// operator's, and on local runs the one the program comes from; the one named
+    /// `preferred` first (its `bin` first on the `PATH`).
     ///
     /// # Errors
-    /// The program's own runtime cannot be used, and why.
-    pub fn runtimes_for(&self, program: &str, bot_dir: &Path) -> Result<Vec<Runtime>, String> {
+    /// The program's own runtime cannot be used, and why; no runtime is named
+    /// `preferred`.
+    pub fn runtimes_for(
+        &self,
+        program: &str,
+        bot_dir: &Path,
+        preferred: Option<&str>,
+    ) -> Result<Vec<Runtime>, String> {
         let mut all = self.runtimes.clone();
+        if let Some(name) = preferred {
+            let at = all
+                .iter()
+                .position(|r| super::runtimes::name_of(r) == name)
+                .ok_or_else(|| {
+                    format!(
+                        "the bot asks for runtime {name:?}, which this server does not offer ({})",
+                        super::runtimes::offered(&self.runtimes)
+                    )
+                })?;
+            let first = all.remove(at);
+            all.insert(0, first);
+        }
         if self.detect {
             // Found once per program and folder: a tournament plays one bot many times.
             let key = (program.to_string(), bot_dir.to_path_buf());

@@ -96,6 +96,8 @@ pub struct LeaderboardPage {
     pub tournaments: Vec<TournamentRow>,
     /// Every maze (hidden ones by name only).
     pub mazes: Vec<MazeRow>,
+    /// The runtimes bots may use here.
+    pub runtimes: Vec<crate::runner::runtimes::RuntimeInfo>,
 }
 
 pub(super) fn standings_table(s: &StandingsSection) -> Markup {
@@ -168,8 +170,46 @@ pub fn leaderboard(p: &LeaderboardPage) -> String {
         p { a href="/tournaments" { "All tournaments" } }
         h2 { "Mazes" }
         (maze_table(&p.mazes))
+        h2 #runtimes { "Runtimes for bots" }
+        (runtime_table(&p.runtimes))
     };
     page("Leaderboard", body)
+}
+
+/// How many package names a runtime's row shows before "and N more".
+const PACKAGES_SHOWN: usize = 12;
+
+/// The runtimes: name, languages, programs with versions, packages.
+fn runtime_table(rows: &[crate::runner::runtimes::RuntimeInfo]) -> Markup {
+    html! {
+        p.muted { "A bot names one as " code { "runtime" } " in its bot.toml or upload to have it first on its PATH; "
+            "the system's is always there. The whole list: " a href="/api/runtimes" { "/api/runtimes" } "." }
+        table.data.runtimes {
+            thead { tr { th { "runtime" } th { "languages" } th { "programs" } th { "packages" } } }
+            tbody {
+                @for r in rows {
+                    tr {
+                        td { code { (r.name) } }
+                        td { (r.languages.join(", ")) }
+                        td {
+                            @for (i, p) in r.programs.iter().enumerate() {
+                                @if i > 0 { br; }
+                                code { (p.program) } span.muted { " " (p.version) }
+                            }
+                        }
+                        td {
+                            @let names: Vec<String> = r.packages.iter().take(PACKAGES_SHOWN)
+                                .map(|p| format!("{} {}", p.name, p.version)).collect();
+                            (names.join(", "))
+                            @if r.packages.len() > PACKAGES_SHOWN {
+                                span.muted { " and " (r.packages.len() - PACKAGES_SHOWN) " more" }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 pub(super) fn tournament_table(rows: &[TournamentRow]) -> Markup {
