@@ -135,6 +135,21 @@ log "pages one request at a time"
   done
 } >>"$out"
 
+log "ranked standings"
+{
+  echo "## Ranked standings: making the table and keeping it"
+  echo
+  echo "\`bash benches/rankings.sh N $RUNS\`: on the database of benches/pages.sh, a fresh server per"
+  echo "run; the first answer makes the table (intervals, possible ranks, tie groups: every"
+  echo "counted match read, grouped by version, maze and seed, and bootstrapped), the next ones"
+  echo "reuse it until a match ends; \`/healthz\` is the floor."
+  echo
+  for n in $PAGE_SIZES; do
+    bash benches/rankings.sh "$n" "$RUNS"
+    echo
+  done
+} >>"$out"
+
 log "bytes per stored match"
 {
   echo "## Bytes per stored match"
