@@ -5,13 +5,24 @@
 # toolchain, golang-go or a JDK here to build those on the server). GET /api/runtimes
 # lists what the image offers bots.
 
+# Where the binary comes from: `build` (default) compiles it in the Rust image;
+# `--build-arg BINARY=prebuilt` takes target/release/mazearena from the build context
+# instead (built on a bookworm-compatible host: for machines that cannot pull the Rust
+# image). The runtime stage below is the same either way.
+ARG BINARY=build
+
 FROM rust:1-bookworm AS build
 WORKDIR /src
 COPY Cargo.toml Cargo.lock build.rs ./
 COPY src src
 COPY migrations migrations
 COPY mazes mazes
-RUN cargo build --release --locked
+RUN cargo build --release --locked && cp target/release/mazearena /mazearena
+
+FROM scratch AS prebuilt
+COPY target/release/mazearena /mazearena
+
+FROM ${BINARY} AS binary
 
 FROM debian:bookworm-slim
 RUN apt-get update \
@@ -20,7 +31,7 @@ RUN apt-get update \
     && useradd --system --create-home --home-dir /var/lib/mazearena mazearena \
     && mkdir -p /var/lib/mazearena/db /var/lib/mazearena/bots \
     && chown -R mazearena:mazearena /var/lib/mazearena
-COPY --from=build /src/target/release/mazearena /usr/local/bin/mazearena
+COPY --from=binary /mazearena /usr/local/bin/mazearena
 COPY bots /opt/mazearena/bots
 COPY mazes /opt/mazearena/mazes
 USER mazearena
