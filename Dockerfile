@@ -20,7 +20,8 @@ COPY mazes mazes
 RUN cargo build --release --locked && cp target/release/mazearena /mazearena
 
 FROM scratch AS prebuilt
-COPY target/release/mazearena /mazearena
+ARG PREBUILT=target/release/mazearena
+COPY ${PREBUILT} /mazearena
 
 FROM ${BINARY} AS binary
 
