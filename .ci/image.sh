@@ -103,7 +103,11 @@ serve() {
 serve
 health=$(curl -s "http://127.0.0.1:$PORT/healthz")
 grep -q '"sandbox":"full"' <<<"$health" || fail "/healthz: $health"
-say "serve: /healthz with the full sandbox"
+# No cgroup can be made in this container: /healthz and the first line say the watchdog
+# keeps the limits.
+grep -q '"limits":"watchdog"' <<<"$health" || fail "/healthz does not say what keeps the limits: $health"
+run_podman logs "$NAME" 2>&1 | grep -q "match limits by watchdog" || fail "the server's first line does not say what keeps the limits"
+say "serve: /healthz with the full sandbox, limits by the watchdog (also in its log)"
 
 upload=$(python3 -c '
 import json

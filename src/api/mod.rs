@@ -60,6 +60,9 @@ pub struct Settings {
     pub max_queue: i64,
     /// The isolation of bots (`full` or `none`), shown by `/healthz`.
     pub sandbox_level: &'static str,
+    /// What keeps each match's limits ([`crate::runner::Sandbox::limits`]), shown by
+    /// `/healthz`.
+    pub limits: &'static str,
     /// The most matches one owner may have waiting in the queue (the admin: no limit).
     pub max_queued_per_owner: i64,
     /// The most bytes of stored match records one owner may have before its new matches

@@ -43,6 +43,11 @@ pub struct Health {
     /// How bots are isolated: `full` (the sandbox) or `none` (started with
     /// `--sandbox none`: only for bots the operator trusts).
     pub sandbox: &'static str,
+    /// What keeps each match's limits on this server: `cgroup` (memory, processes, one
+    /// core per match), `watchdog` (no cgroup could be made here, e.g. in a container:
+    /// memory and processes watched over the bot's process tree, no CPU limit) or
+    /// `rlimit` (no sandbox: the address space only).
+    pub limits: &'static str,
     /// The processes playing matches (this server's pool and `mazearena worker`s, on any
     /// machine) that reported within the last 30 seconds.
     pub workers: Vec<WorkerRow>,
@@ -62,6 +67,7 @@ async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>>
         status: "ok",
         queued,
         sandbox: state.settings.sandbox_level,
+        limits: state.settings.limits,
         workers,
     }))
 }

@@ -246,6 +246,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             data_dir,
             max_queue: args.max_queue,
             sandbox_level: sandbox.level(),
+            limits: sandbox.limits(),
             max_queued_per_owner: args.max_queued_per_owner,
             max_stored_bytes_per_owner: (args.max_stored_mib_per_owner > 0.0)
                 .then_some((args.max_stored_mib_per_owner * 1_048_576.0) as i64),
@@ -262,9 +263,15 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot listen on {}", args.bind))?;
     let addr = listener.local_addr()?;
     println!(
-        "mazearena listening on http://{addr} ({}, sandbox {})",
+        "mazearena listening on http://{addr} ({}, sandbox {}, match limits by {}{})",
         super::count(jobs as i64, "match worker", "match workers"),
-        state.settings.sandbox_level
+        state.settings.sandbox_level,
+        state.settings.limits,
+        if state.settings.limits == "watchdog" {
+            ": no cgroup could be made here, so no CPU limit"
+        } else {
+            ""
+        }
     );
     use std::io::Write;
     let _ = std::io::stdout().flush();

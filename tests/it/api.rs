@@ -1811,7 +1811,10 @@ fn a_servers_log_written_to_a_file_is_plain_text() {
     std::io::BufReader::new(child.stdout.take().unwrap())
         .read_line(&mut line)
         .unwrap();
-    assert!(line.contains("(1 match worker, sandbox none)"), "{line}");
+    assert!(
+        line.contains("(1 match worker, sandbox none, match limits by rlimit)"),
+        "{line}"
+    );
     // Once it answers, its signal handler is in place.
     let addr = line
         .split("http://")

@@ -297,6 +297,17 @@ async fn hostile_bots_on_a_real_server_are_contained_and_an_honest_match_is_unaf
     let server = TestServer::start(tmp.path(), &["--jobs", "2"]);
     let (status, health) = server.get("/healthz", None).await;
     assert_eq!((status, health["sandbox"].as_str()), (200, Some("full")));
+    // What keeps the limits, as `doctor` finds it on this machine.
+    let doctor = crate::support::mazearena(&["doctor"]);
+    let text = String::from_utf8_lossy(&doctor.stdout).into_owned();
+    let cgroups_ok = text
+        .lines()
+        .any(|l| l.starts_with("cgroups") && l.split_whitespace().nth(1) == Some("ok"));
+    assert_eq!(
+        health["limits"].as_str(),
+        Some(if cgroups_ok { "cgroup" } else { "watchdog" }),
+        "{health}\n{text}"
+    );
     let server_pid = server.pid().to_string();
     let db = tmp.path().join("mazearena.db").display().to_string();
     let attackers = [

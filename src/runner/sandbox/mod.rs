@@ -180,6 +180,19 @@ impl Sandbox {
         }
     }
 
+    /// What keeps a match's memory, process and CPU limits, shown by `/healthz` and the
+    /// server's first line: `cgroup` (a cgroup per match: memory, processes, one core),
+    /// `watchdog` (no cgroup could be made here, e.g. in a container: memory and
+    /// processes watched over the bot's process tree, no CPU limit) or `rlimit` (no
+    /// sandbox: the address space only).
+    pub fn limits(&self) -> &'static str {
+        match self {
+            Sandbox::Full(f) if f.cgroups.is_ok() => "cgroup",
+            Sandbox::Full(_) => "watchdog",
+            Sandbox::None => "rlimit",
+        }
+    }
+
     /// Sets up the full sandbox with `helper` as the `mazearena` binary (usually
     /// `std::env::current_exe()`), and proves that it works by running a command in it.
     /// `setup` says which runtimes are mounted and what no runtime may hold.
