@@ -113,8 +113,25 @@ fn session() -> anyhow::Result<(Config, PathBuf, Api)> {
     Ok((cfg, path, api))
 }
 
-/// Who the key is: (kind, entrant name, bots as (id, name)).
-async fn me(api: &Api) -> Result<(String, Option<String>, Vec<(i64, String)>), ClientError> {
+/// Who the key is (`GET /api/me`), asked once per command.
+struct Me {
+    /// `admin`, `organiser`, `entrant`, `owner`, or `anonymous` without a key.
+    kind: String,
+    /// The entrant's name, for an entrant's key.
+    entrant: Option<String>,
+    /// The bots the key acts for, as (id, name).
+    bots: Vec<(i64, String)>,
+}
+
+/// Who the key is; without a key, anonymous (no request is made).
+async fn me(api: &Api) -> Result<Me, ClientError> {
+    if api.key().is_none() {
+        return Ok(Me {
+            kind: "anonymous".into(),
+            entrant: None,
+            bots: Vec::new(),
+        });
+    }
     let v: Value = api.get("/api/me").await?;
     let bots = v["bots"]
         .as_array()
@@ -124,27 +141,27 @@ async fn me(api: &Api) -> Result<(String, Option<String>, Vec<(i64, String)>), C
                 .collect()
         })
         .unwrap_or_default();
-    Ok((
-        v["kind"].as_str().unwrap_or("").to_string(),
-        v["entrant"].as_str().map(str::to_string),
+    Ok(Me {
+        kind: v["kind"].as_str().unwrap_or("").to_string(),
+        entrant: v["entrant"].as_str().map(str::to_string),
         bots,
-    ))
+    })
 }
 
-/// Your bots: those of the key, and those registered from here without one.
-async fn my_bots(api: &Api, cfg: &Config) -> anyhow::Result<Vec<(i64, String, Option<String>)>> {
-    let mut out: Vec<(i64, String, Option<String>)> = Vec::new();
-    if api.key().is_some() {
-        for (id, name) in me(api).await?.2 {
-            out.push((id, name, None));
-        }
-    }
+/// Your bots: those the key acts for, and those registered from here without one
+/// (with their owner token).
+fn my_bots(me: &Me, cfg: &Config) -> Vec<(i64, String, Option<String>)> {
+    let mut out: Vec<(i64, String, Option<String>)> = me
+        .bots
+        .iter()
+        .map(|(id, name)| (*id, name.clone(), None))
+        .collect();
     for (name, b) in &cfg.bots {
         if !out.iter().any(|(id, _, _)| *id == b.bot_id) {
             out.push((b.bot_id, name.clone(), Some(b.token.clone())));
         }
     }
-    Ok(out)
+    out
 }
 
 /// Picks one of `bots` by `name`, or the only one.
@@ -193,7 +210,11 @@ pub fn login(args: LoginArgs) -> anyhow::Result<()> {
         "no key given (--key KEY, or on standard input)"
     );
     let api = Api::new(&args.server, Some(key.trim().to_string()))?;
-    let (kind, entrant, bots) = runtime()?.block_on(me(&api))?;
+    let Me {
+        kind,
+        entrant,
+        bots,
+    } = runtime()?.block_on(me(&api))?;
     let path = config_path()?;
     let mut cfg = Config::load(&path)?;
     if cfg.server.as_deref() != Some(api.server()) {
@@ -316,11 +337,9 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
             }
             f
         };
-        let entrant = match api.key() {
-            Some(_) => me(&api).await?.0 == "entrant",
-            None => false,
-        };
-        let mine = my_bots(&api, &cfg).await?;
+        let who = me(&api).await?;
+        let entrant = who.kind == "entrant";
+        let mine = my_bots(&who, &cfg);
         let existing = mine.iter().find(|b| b.1 == bot.name);
         let (bot_id, version) = match existing {
             Some((id, _, token)) => {
@@ -473,14 +492,9 @@ async fn follow_build(
 pub fn status(args: StatusArgs) -> anyhow::Result<()> {
     let (cfg, _, api) = session()?;
     runtime()?.block_on(async {
-        let (kind, entrant) = match api.key() {
-            Some(_) => {
-                let (k, e, _) = me(&api).await?;
-                (k, e)
-            }
-            None => ("anonymous".into(), None),
-        };
-        let bots = my_bots(&api, &cfg).await?;
+        let who = me(&api).await?;
+        let bots = my_bots(&who, &cfg);
+        let Me { kind, entrant, .. } = who;
         let board: Value = api.get("/api/leaderboard?scope=all").await?;
         let ranking: Value = api.get("/api/leaderboard").await?;
         let mut out_bots = Vec::new();
@@ -620,7 +634,7 @@ fn score_text(v: &Value) -> String {
 pub fn matches(args: MatchesArgs) -> anyhow::Result<()> {
     let (cfg, _, api) = session()?;
     runtime()?.block_on(async {
-        let bots = my_bots(&api, &cfg).await?;
+        let bots = my_bots(&me(&api).await?, &cfg);
         let chosen: Vec<&(i64, String, Option<String>)> = match &args.bot {
             Some(_) => vec![pick(&bots, args.bot.as_deref())?],
             None => bots.iter().collect(),
@@ -720,7 +734,7 @@ async fn match_id(api: &Api, cfg: &Config, spec: &str) -> anyhow::Result<i64> {
         "{spec:?} is not a match id (a number, or `last`)"
     );
     let mut newest: Option<i64> = None;
-    for (bot, _, _) in my_bots(api, cfg).await? {
+    for (bot, _, _) in my_bots(&me(api).await?, cfg) {
         let page: Value = api
             .get(&format!("/api/matches?bot_id={bot}&limit=200"))
             .await?;
@@ -774,7 +788,7 @@ pub fn replay(spec: &str, output: Option<PathBuf>) -> anyhow::Result<()> {
 pub fn practice(args: PracticeArgs) -> anyhow::Result<()> {
     let (cfg, _, api) = session()?;
     runtime()?.block_on(async {
-        let bots = my_bots(&api, &cfg).await?;
+        let bots = my_bots(&me(&api).await?, &cfg);
         let (bot_id, bot_name, _) = pick(&bots, args.bot.as_deref())?.clone();
         let owner = owner_api(&api, &cfg, bot_id);
         let all = maze_names(&api).await?;

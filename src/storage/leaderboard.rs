@@ -117,17 +117,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn leaderboard_recount(&self, scope: Scope) -> Result<Vec<Standing>> {
-        let filter = match scope {
-            Scope::Tournament(_) => "m.tournament_id = $1",
-            Scope::Ranking => {
-                "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)
-                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
-            }
-            Scope::All => {
-                "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = b.bot_id)
-                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
-            }
-        };
+        let filter = match_filter(scope);
         let sql = format!(
             "select b.bot_id, b.name, v.version, count(*) as played,
                  cast(sum(case when m.status = 'finished' then 1 else 0 end) as bigint) as finished,
@@ -156,21 +146,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn standing_samples(&self, scope: Scope) -> Result<Vec<(i64, i64, Sample)>> {
-        let filter = match scope {
-            Scope::Tournament(_) => "m.tournament_id = $1",
-            Scope::Ranking => {
-                "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = v.bot_id)
-                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
-            }
-            Scope::All => {
-                "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = v.bot_id)
-                 and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
-            }
-        };
-        let tournament = match scope {
-            Scope::Tournament(id) => Some(id),
-            _ => None,
-        };
+        let filter = match_filter(scope);
         // One row per (version, maze, seed): several runs on one seed are averaged
         // (as the ranking does), so a standing counted many times over reads few rows.
         let sql = format!(
@@ -183,7 +159,7 @@ impl Storage {
              group by v.bot_id, v.version, m.maze_id, m.seed"
         );
         let rows: Vec<(i64, i64, i64, i64, f64)> = sqlx::query_as(&sql)
-            .bind(tournament)
+            .bind(tournament_of(scope))
             .fetch_all(self.pool())
             .await?;
         Ok(rows
@@ -193,18 +169,40 @@ impl Storage {
     }
 
     async fn standings(&self, sql: &str, scope: Scope) -> Result<Vec<Standing>> {
-        let tournament = match scope {
-            Scope::Tournament(id) => Some(id),
-            _ => None,
-        };
         let mut rows: Vec<Standing> = sqlx::query_as(sql)
-            .bind(tournament)
+            .bind(tournament_of(scope))
             .fetch_all(self.pool())
             .await?;
         for (i, row) in rows.iter_mut().enumerate() {
             row.rank = i as i64 + 1;
         }
         Ok(rows)
+    }
+}
+
+/// The `where` clause over `match m` (joined to `bot_version v` and `maze z`) of the
+/// matches a standing of `scope` counts, the tournament bound as `$1`
+/// ([`tournament_of`]): the slow recount's and the intervals' (the running sums of
+/// [`Storage::leaderboard`] hold the same matches).
+fn match_filter(scope: Scope) -> &'static str {
+    match scope {
+        Scope::Tournament(_) => "m.tournament_id = $1",
+        Scope::Ranking => {
+            "z.hidden = 1 and cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = v.bot_id)
+             and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
+        }
+        Scope::All => {
+            "cast($1 as bigint) is null and v.version = (select max(version) from bot_version where bot_id = v.bot_id)
+             and not exists (select 1 from tournament t where t.tournament_id = m.tournament_id and t.competition_id is not null)"
+        }
+    }
+}
+
+/// The value bound as `$1` in a standing's query: its tournament, if any.
+fn tournament_of(scope: Scope) -> Option<i64> {
+    match scope {
+        Scope::Tournament(id) => Some(id),
+        _ => None,
     }
 }
 
