@@ -42,8 +42,10 @@ ENV MAZEARENA_BIND=0.0.0.0:8080 \
     MAZEARENA_DATA_DIR=/var/lib/mazearena/bots
 VOLUME ["/var/lib/mazearena/db", "/var/lib/mazearena/bots"]
 EXPOSE 8080
+# The server's own port (MAZEARENA_BIND); a `worker` serves no HTTP: run it with the
+# health check off (compose: `healthcheck: disable`, podman: `--no-healthcheck`).
 HEALTHCHECK --interval=30s --timeout=5s \
-    CMD python3 -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8080/healthz', timeout=4)"
+    CMD python3 -c "import os, urllib.request; port = os.environ['MAZEARENA_BIND'].rsplit(':', 1)[1]; urllib.request.urlopen('http://127.0.0.1:' + port + '/healthz', timeout=4)"
 # tini passes SIGTERM on, so running matches finish or are re-queued on `docker stop`.
 ENTRYPOINT ["tini", "--", "mazearena"]
 CMD ["serve"]

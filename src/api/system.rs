@@ -40,13 +40,14 @@ pub struct Health {
     pub status: &'static str,
     /// Matches waiting to be played.
     pub queued: i64,
-    /// How bots are isolated: `full` (the sandbox) or `none` (started with
-    /// `--sandbox none`: only for bots the operator trusts).
+    /// How bots are isolated: `full` (the sandbox), `none` (started with
+    /// `--sandbox none`: only for bots the operator trusts) or `unused` (an API server,
+    /// `serve --jobs 0`, runs no bot; each of `workers` reports its own).
     pub sandbox: &'static str,
     /// What keeps each match's limits on this server: `cgroup` (memory, processes, one
     /// core per match), `watchdog` (no cgroup could be made here, e.g. in a container:
     /// memory and processes watched over the bot's process tree, no CPU limit) or
-    /// `rlimit` (no sandbox: the address space only).
+    /// `rlimit` (no sandbox: the address space only); `unused` on an API server.
     pub limits: &'static str,
     /// The processes playing matches (this server's pool and `mazearena worker`s, on any
     /// machine) that reported within the last 30 seconds.

@@ -202,6 +202,10 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     runtime.block_on(serve(args))
 }
 
+/// What `/healthz` says of the sandbox and the limits on an API-only server (`--jobs 0`):
+/// it plays no match; each worker in `workers` reports its own.
+const API_ONLY: &str = "unused";
+
 async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.data_dir).with_context(|| {
         format!(
@@ -213,10 +217,20 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .data_dir
         .canonicalize()
         .with_context(|| format!("cannot resolve {}", args.data_dir.display()))?;
-    let sandbox = args
-        .sandbox
-        .open(&hidden_paths(&data_dir, &args.database), false)
-        .context("refusing to serve without the sandbox")?;
+    let jobs = args.pool.jobs(0);
+    let hide = hidden_paths(&data_dir, &args.database);
+    // An API server (`--jobs 0`) runs no bot and builds nothing, so it needs no sandbox
+    // (in a container it runs without the options the sandbox needs); it still lists the
+    // runtimes it was given, as its workers offer them.
+    let sandbox = if jobs == 0 {
+        None
+    } else {
+        Some(
+            args.sandbox
+                .open(&hide, false)
+                .context("refusing to serve without the sandbox")?,
+        )
+    };
     let storage = args.pool.storage(
         Storage::open(&args.database)
             .await
@@ -231,11 +245,12 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
 
     let admin_token = admin_token(args.admin_token.as_deref(), &data_dir)?;
     let offered = match &sandbox {
-        crate::runner::Sandbox::Full(f) => f.runtimes.clone(),
-        crate::runner::Sandbox::None => Vec::new(),
+        Some(crate::runner::Sandbox::Full(f)) => f.runtimes.clone(),
+        Some(crate::runner::Sandbox::None) => Vec::new(),
+        None => crate::runner::sandbox::listed_runtimes(&args.sandbox.runtimes, &hide)
+            .map_err(|e| anyhow::anyhow!("{e}"))?,
     };
     let runtimes = Arc::new(crate::runner::runtimes::probe(&offered).await);
-    let jobs = args.pool.jobs(0);
     let metrics = Metrics::new();
     let wake = Arc::new(Notify::new());
     let clock_wake = wake.clone();
@@ -245,8 +260,8 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             admin_token_hash: auth::hash_token(&admin_token),
             data_dir,
             max_queue: args.max_queue,
-            sandbox_level: sandbox.level(),
-            limits: sandbox.limits(),
+            sandbox_level: sandbox.as_ref().map_or(API_ONLY, |s| s.level()),
+            limits: sandbox.as_ref().map_or(API_ONLY, |s| s.limits()),
             max_queued_per_owner: args.max_queued_per_owner,
             max_stored_bytes_per_owner: (args.max_stored_mib_per_owner > 0.0)
                 .then_some((args.max_stored_mib_per_owner * 1_048_576.0) as i64),
@@ -262,23 +277,29 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         .await
         .with_context(|| format!("cannot listen on {}", args.bind))?;
     let addr = listener.local_addr()?;
-    println!(
-        "mazearena listening on http://{addr} ({}, sandbox {}, match limits by {}{})",
-        super::count(jobs as i64, "match worker", "match workers"),
-        state.settings.sandbox_level,
-        state.settings.limits,
-        if state.settings.limits == "watchdog" {
-            ": no cgroup could be made here, so no CPU limit"
-        } else {
-            ""
-        }
-    );
+    if sandbox.is_none() {
+        println!(
+            "mazearena listening on http://{addr} (API only: no match workers, so no sandbox here; the workers report their own)"
+        );
+    } else {
+        println!(
+            "mazearena listening on http://{addr} ({}, sandbox {}, match limits by {}{})",
+            super::count(jobs as i64, "match worker", "match workers"),
+            state.settings.sandbox_level,
+            state.settings.limits,
+            if state.settings.limits == "watchdog" {
+                ": no cgroup could be made here, so no CPU limit"
+            } else {
+                ""
+            }
+        );
+    }
     use std::io::Write;
     let _ = std::io::stdout().flush();
 
     let shutdown = Shutdown::default();
     let tracker = TaskTracker::new();
-    let pool = if jobs > 0 {
+    let pool = if let Some(sandbox) = sandbox {
         Some(worker::spawn_workers(
             &tracker,
             storage.clone(),

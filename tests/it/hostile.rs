@@ -402,3 +402,46 @@ async fn hostile_bots_on_a_real_server_are_contained_and_an_honest_match_is_unaf
         );
     }
 }
+
+/// An API server (`serve --jobs 0`) runs no bot, so it starts where the sandbox cannot
+/// be had (as in a container started without the sandbox's options) and says so; a
+/// server that plays matches there refuses to start.
+#[tokio::test]
+async fn an_api_only_server_needs_no_sandbox_and_one_that_plays_refuses_without_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    // No bubblewrap on this PATH: the full sandbox cannot be had.
+    let env = [("MAZEARENA_SANDBOX", "full"), ("PATH", "/nonexistent")];
+    let played = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
+        .args([
+            "serve",
+            "--jobs",
+            "1",
+            "--bind",
+            "127.0.0.1:0",
+            "--data-dir",
+        ])
+        .arg(tmp.path().join("refused"))
+        .arg("--database")
+        .arg(format!(
+            "sqlite://{}",
+            tmp.path().join("refused.db").display()
+        ))
+        .env("MAZEARENA_ADMIN_TOKEN", crate::support::ADMIN)
+        .envs(env)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&played.stderr);
+    assert!(
+        !played.status.success() && text.contains("refusing to serve without the sandbox"),
+        "{text}"
+    );
+    let server = TestServer::start_on(tmp.path(), None, &["--jobs", "0"], &env);
+    let (status, health) = server.get("/healthz", None).await;
+    assert_eq!(status, 200);
+    assert_eq!(
+        (health["sandbox"].as_str(), health["limits"].as_str()),
+        (Some("unused"), Some("unused")),
+        "{health}"
+    );
+    assert_eq!(health["workers"], json!([]), "{health}");
+}

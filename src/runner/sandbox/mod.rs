@@ -415,6 +415,15 @@ pub fn find_program(name: &str) -> Option<PathBuf> {
 pub(crate) use view::bwrap_args;
 pub use view::{Runtime, Work, runtime_of_program};
 
+/// The operator's runtimes (`--runtime`) as a sandbox would mount them, for a process
+/// that runs no bot but says what its workers offer (`serve --jobs 0`).
+///
+/// # Errors
+/// A listed folder cannot be offered (missing, a home folder, holds `hide`).
+pub fn listed_runtimes(listed: &[PathBuf], hide: &[PathBuf]) -> Result<Vec<Runtime>, String> {
+    view::listed_runtimes(listed, hide)
+}
+
 impl FullSandbox {
     /// The runtimes mounted for a bot or build whose program is `program`: the
     /// operator's, and on local runs the one the program comes from; the one named
