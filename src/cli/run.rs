@@ -93,7 +93,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         scratch_mb: args.scratch_mb.max(1),
         ..Limits::default()
     };
-    let sandbox = args.sandbox.open(&[], true)?;
+    // The match itself proves the sandbox: the test command runs only if it fails.
+    let sandbox = args.sandbox.open_unverified(&[], true)?;
     // Said before the match (the match still runs: the bot may mean to fail to open it).
     if let Some(outside) = file_outside_the_folder(&args.bot, &dir) {
         let message = outside_message(&args.bot, &dir, &outside);
@@ -146,6 +147,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             }
         },
     ));
+    if !matches!(
+        record.status,
+        MatchStatus::Finished | MatchStatus::StepLimit
+    ) {
+        // A bot that failed in a sandbox that does not work here is not the bot's fault.
+        super::sandbox::SandboxArgs::verify(&sandbox)?;
+    }
     let mut record = record;
     record.maze_layout = Some(crate::engine::mazefile::numeric::write(&maze));
     let title = format!(

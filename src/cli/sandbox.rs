@@ -56,6 +56,29 @@ impl SandboxArgs {
     /// # Errors
     /// `full` was asked and cannot be had here: the reason, and how to see more.
     pub fn open(&self, hide: &[PathBuf], local: bool) -> anyhow::Result<Sandbox> {
+        self.open_checked(hide, local, true)
+    }
+
+    /// [`SandboxArgs::open`] without the test command (see
+    /// [`Sandbox::full_unverified`]): for one match, which is followed by
+    /// [`SandboxArgs::verify`] when it fails.
+    ///
+    /// # Errors
+    /// As [`SandboxArgs::open`], except for the test command's.
+    pub fn open_unverified(&self, hide: &[PathBuf], local: bool) -> anyhow::Result<Sandbox> {
+        self.open_checked(hide, local, false)
+    }
+
+    /// Runs the sandbox's test command: `Err` with the reason when the sandbox does not
+    /// work here, worded as [`SandboxArgs::open`]'s.
+    ///
+    /// # Errors
+    /// The sandbox does not work here.
+    pub fn verify(sandbox: &Sandbox) -> anyhow::Result<()> {
+        sandbox.verify().map_err(unavailable)
+    }
+
+    fn open_checked(&self, hide: &[PathBuf], local: bool, test: bool) -> anyhow::Result<Sandbox> {
         match self.sandbox {
             SandboxChoice::None => {
                 eprintln!(
@@ -65,14 +88,23 @@ impl SandboxArgs {
             }
             SandboxChoice::Full => {
                 let exe = std::env::current_exe().context("cannot find the mazearena binary")?;
-                Sandbox::full(&exe, &self.setup(hide, local)).map_err(|e| {
-                    anyhow::anyhow!(
-                        "{e}\n`mazearena doctor` shows what works here; `--sandbox none` runs bots unisolated (only for bots you trust)"
-                    )
-                })
+                let setup = self.setup(hide, local);
+                if test {
+                    Sandbox::full(&exe, &setup)
+                } else {
+                    Sandbox::full_unverified(&exe, &setup)
+                }
+                .map_err(unavailable)
             }
         }
     }
+}
+
+/// The sandbox's reason, with what to do about it.
+fn unavailable(e: crate::runner::sandbox::Unavailable) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{e}\n`mazearena doctor` shows what works here; `--sandbox none` runs bots unisolated (only for bots you trust)"
+    )
 }
 
 /// Arguments of `mazearena doctor`.

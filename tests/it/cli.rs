@@ -826,3 +826,48 @@ fn doctor_exits_1_when_the_full_sandbox_cannot_run_and_0_when_it_can() {
         Some(2)
     );
 }
+
+/// `mazearena run` proves the sandbox with the match itself (no test command first): a
+/// bot that cannot start because the sandbox does not work here is reported as the
+/// sandbox's failure, never as the bot's, and the command fails as before.
+#[test]
+fn run_reports_a_sandbox_that_does_not_work_not_a_crashed_bot() {
+    let Some(_) = crate::support::full_sandbox("run with a broken sandbox") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("bwrap");
+    std::fs::write(
+        &fake,
+        "#!/bin/sh\necho 'bwrap: Creating new namespace failed: Operation not permitted' >&2\nexit 1\n",
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mazearena"))
+        .args([
+            "run",
+            "--maze",
+            "mazes/gen-12-s1.txt",
+            "--bot",
+            "python3 simple_bot.py",
+        ])
+        .args(["--bot-dir", "bots/python", "--sandbox", "full", "--json"])
+        .env("PATH", format!("{}:/usr/bin:/bin", dir.path().display()))
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("the sandbox is not available")
+            && err.contains("Creating new namespace failed")
+            && err.contains("mazearena doctor"),
+        "{err}"
+    );
+    assert!(
+        out.stdout.is_empty(),
+        "no result is printed: {:?}",
+        out.stdout
+    );
+}

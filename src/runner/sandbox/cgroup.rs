@@ -333,10 +333,21 @@ impl MatchCgroup {
         Ok(dir.to_path_buf())
     }
 
-    /// Its `cgroup.procs` files, one per hierarchy: writing `0` to each moves the
-    /// writing process in. Done by `sandbox-enter` before it runs bubblewrap.
-    pub fn procs_files(&self) -> Vec<PathBuf> {
-        self.dirs.iter().map(|d| d.join("cgroup.procs")).collect()
+    /// The files `sandbox-enter` writes `0` to, one per hierarchy, to move itself in
+    /// before it runs bubblewrap: with v1 each hierarchy's `tasks` (the writing thread:
+    /// `sandbox-enter` has only the one), with v2 `cgroup.procs`.
+    ///
+    /// With v1, a write to `cgroup.procs` takes the kernel's global lock of every
+    /// thread group, whose writer waits out an RCU grace period: 10-20 ms a match on the
+    /// project's machine. Moving the writing thread alone through `tasks` skips that
+    /// lock (0.06 ms), and a process of one thread is then wholly in the cgroup
+    /// (BENCHMARKS.md, "The sandbox's cost per match").
+    pub fn join_files(&self) -> Vec<PathBuf> {
+        let file = match self.version {
+            CgroupRoot::V1 { .. } => "tasks",
+            CgroupRoot::V2 { .. } => "cgroup.procs",
+        };
+        self.dirs.iter().map(|d| d.join(file)).collect()
     }
 
     /// CPU time used by every process that ever ran in the cgroup, in microseconds.

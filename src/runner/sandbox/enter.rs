@@ -15,7 +15,7 @@ use std::path::PathBuf;
 /// What `sandbox-enter` is asked to do (its command line).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct EnterArgs {
-    /// The `cgroup.procs` files to join, in order.
+    /// The files to join by, in order (see [`super::cgroup::MatchCgroup::join_files`]).
     pub join: Vec<PathBuf>,
     /// The program to run then (bubblewrap) and its arguments.
     pub command: Vec<OsString>,
@@ -53,7 +53,18 @@ impl EnterArgs {
 
 /// Joins the cgroups and runs the command in place of this process. Returns only when
 /// that failed, with the reason.
+///
+/// A v1 `tasks` file moves only the writing thread: this step refuses one unless the
+/// process has that one thread (as `sandbox-enter` has, being run before anything of the
+/// binary starts a thread), so nothing of it stays outside.
 pub fn exec(args: &EnterArgs) -> String {
+    if args.join.iter().any(|p| p.ends_with("tasks")) {
+        match std::fs::read_dir("/proc/self/task").map(Iterator::count) {
+            Ok(1) => {}
+            Ok(n) => return format!("cannot join the match's cgroup by thread: {n} threads"),
+            Err(e) => return format!("cannot count this process's threads: {e}"),
+        }
+    }
     for path in &args.join {
         let joined = std::fs::OpenOptions::new()
             .write(true)
@@ -76,7 +87,7 @@ mod tests {
     #[test]
     fn arguments_round_trip() {
         let args = EnterArgs {
-            join: vec!["/sys/fs/cgroup/memory/m/cgroup.procs".into(), "/x y".into()],
+            join: vec!["/sys/fs/cgroup/memory/m/tasks".into(), "/x y".into()],
             command: vec!["/usr/bin/bwrap".into(), "--".into(), "--join".into()],
         };
         assert_eq!(EnterArgs::parse(&args.to_args()), Ok(args));
@@ -94,6 +105,27 @@ mod tests {
         );
         assert_eq!(parse(&["--join", "p"]), Err("no command after --".into()));
         assert_eq!(parse(&["--"]), Err("no command after --".into()));
+    }
+
+    #[test]
+    fn joining_by_thread_is_refused_to_a_process_of_several_threads() {
+        // The test harness runs this on a thread of its own: more than one.
+        let dir = tempfile::tempdir().unwrap();
+        let marker = dir.path().join("ran");
+        let tasks = dir.path().join("tasks");
+        std::fs::write(&tasks, "").unwrap();
+        let args = EnterArgs {
+            join: vec![tasks.clone()],
+            command: vec![
+                "sh".into(),
+                "-c".into(),
+                format!("touch {}", marker.display()).into(),
+            ],
+        };
+        let reason = exec(&args);
+        assert!(reason.contains("threads"), "{reason}");
+        assert_eq!(std::fs::read_to_string(&tasks).unwrap(), "", "nothing joined");
+        assert!(!marker.exists());
     }
 
     #[test]

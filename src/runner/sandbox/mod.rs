@@ -140,7 +140,7 @@ impl FullSandbox {
             }
             Some(cgroup) => {
                 let enter = enter::EnterArgs {
-                    join: cgroup.procs_files(),
+                    join: cgroup.join_files(),
                     command: std::iter::once(self.bwrap.clone().into_os_string())
                         .chain(tail)
                         .collect(),
@@ -204,8 +204,52 @@ impl Sandbox {
         Sandbox::full_tested(helper, setup).map(|(sandbox, _)| sandbox)
     }
 
+    /// [`Sandbox::full`] without the test command, for one match that proves the sandbox
+    /// itself (`mazearena run`): every wall is still made, and the jail still refuses to
+    /// run the bot when one cannot be; a match that fails is followed by
+    /// [`Sandbox::verify`], so a sandbox that does not work is reported as such.
+    ///
+    /// # Errors
+    /// As [`Sandbox::full`], except for the test command's.
+    pub fn full_unverified(helper: &Path, setup: &Setup) -> Result<Sandbox, Unavailable> {
+        Sandbox::prepare(helper, setup)
+    }
+
+    /// Runs the test command in the sandbox and checks what it saw (`NoNewPrivs`,
+    /// `Seccomp`); `Ok` for no sandbox.
+    ///
+    /// # Errors
+    /// [`Unavailable`] with the reason.
+    pub fn verify(&self) -> Result<(), Unavailable> {
+        match self {
+            Sandbox::None => Ok(()),
+            Sandbox::Full(_) => self.checked_status().map(drop),
+        }
+    }
+
     /// [`Sandbox::full`], with the fields of `/proc/self/status` its test command saw.
     fn full_tested(helper: &Path, setup: &Setup) -> Result<(Sandbox, Status), Unavailable> {
+        let sandbox = Sandbox::prepare(helper, setup)?;
+        let status = sandbox.checked_status()?;
+        Ok((sandbox, status))
+    }
+
+    /// The test command's `/proc/self/status`, once its walls are checked.
+    fn checked_status(&self) -> Result<Status, Unavailable> {
+        let status = self.self_test()?;
+        for (key, want) in [("NoNewPrivs", "1"), ("Seccomp", "2")] {
+            if status.get(key).map(String::as_str) != Some(want) {
+                return Err(Unavailable(format!(
+                    "a test command in the sandbox has {key} = {:?}, not {want}",
+                    status.get(key)
+                )));
+            }
+        }
+        Ok(status)
+    }
+
+    /// Finds bubblewrap, the cgroups and the runtimes: the sandbox, not yet tested.
+    fn prepare(helper: &Path, setup: &Setup) -> Result<Sandbox, Unavailable> {
         let bwrap = find_program("bwrap").ok_or_else(|| {
             Unavailable(
                 "bubblewrap (`bwrap`) is not installed (Debian: apt-get install bubblewrap)".into(),
@@ -224,17 +268,7 @@ impl Sandbox {
             hide: setup.hide.clone(),
             detected: DetectedRuntimes::default(),
         };
-        let sandbox = Sandbox::Full(Arc::new(full));
-        let status = sandbox.self_test()?;
-        for (key, want) in [("NoNewPrivs", "1"), ("Seccomp", "2")] {
-            if status.get(key).map(String::as_str) != Some(want) {
-                return Err(Unavailable(format!(
-                    "a test command in the sandbox has {key} = {:?}, not {want}",
-                    status.get(key)
-                )));
-            }
-        }
-        Ok((sandbox, status))
+        Ok(Sandbox::Full(Arc::new(full)))
     }
 
     /// Runs `cat /proc/self/status` in the sandbox and returns its fields.
