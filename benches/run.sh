@@ -103,6 +103,18 @@ log "the sandbox's cost per match"
   echo
   bash benches/match_overhead.sh "$OVERHEAD" | sed 's/^/    /'
   echo
+  echo "### Where it goes"
+  echo
+  echo "\`bash benches/sandbox_cost.sh $STEP_RUNS\`: a 100-step \`mazearena run\` with and without the"
+  echo "sandbox in turn, the sandboxed run's stages from perf's tracepoints, and a 240-match"
+  echo "tournament of the C kit (the script's header says what each stage holds)."
+  echo
+  if command -v perf >/dev/null 2>&1; then
+    bash benches/sandbox_cost.sh "$STEP_RUNS"
+  else
+    echo "(not measured: perf is not installed)"
+  fi
+  echo
 } >>"$out"
 
 log "HTTP under load"

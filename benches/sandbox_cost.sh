@@ -1,22 +1,32 @@
 #!/usr/bin/env bash
-# Where the sandbox's cost per match goes: a 100-step `mazearena run` of
-# benches/trivial_bot.c (it idles 15 steps, then plays gen-16-s1's optimal path twice),
-# with and without the sandbox, taken in turn RUNS times (medians; the cost is the median
-# of the paired differences), then the sandboxed run's stages from the kernel's own
-# timestamps (perf's sched and syscall tracepoints, which cost nothing between events):
+# Where the sandbox's cost per match goes, and what it costs a tournament:
 #
-#   start        process start to the first cgroup made (the same without the sandbox)
-#   probe        the start-up check: a cgroup made and removed, then a command run in a
-#                whole sandbox (bubblewrap, the jail, `cat /proc/self/status`)
-#   cgroup       the match's cgroups made and limited
-#   enter        `mazearena sandbox-enter` (joins the cgroups) until bubblewrap's exec
-#   bwrap        bubblewrap: namespaces, the view's mounts, until the jail's exec
-#   jail         `mazearena sandbox-exec`: limits, uid, no_new_privs, Landlock, seccomp
-#   match        the bot's exec to its exit (the steps)
-#   exit         the bot's exit to bubblewrap's (the sandbox's processes end)
-#   teardown     bubblewrap's exit to the runner's (cgroups removed, the record written)
+# 1. A 100-step `mazearena run` of benches/trivial_bot.c (it idles 15 steps, then plays
+#    gen-16-s1's optimal path twice), with and without the sandbox, taken in turn RUNS
+#    times (medians; the cost is the median of the paired differences).
+# 2. The sandboxed run's stages from the kernel's own timestamps (perf's sched and
+#    syscall tracepoints, which cost nothing between events), medians of RUNS runs:
+#      start      process start to the first cgroup folder (the same without the sandbox)
+#      probe      the start-up test command in a whole sandbox (bubblewrap, the jail,
+#                 `cat /proc/self/status`), when there is one
+#      cgroup     the match's cgroups made and limited
+#      enter      `mazearena sandbox-enter` (joins the cgroups) until bubblewrap's exec
+#      bwrap      bubblewrap: namespaces, the view's mounts, until the jail's exec
+#      jail       `mazearena sandbox-exec`: limits, uid, no_new_privs, Landlock, seccomp
+#      match      the bot's exec to its exit (the steps)
+#      exit       the bot's exit to bubblewrap's (the sandbox's processes end)
+#      teardown   bubblewrap's exit to the runner's (cgroups removed, the record written)
+# 3. A small tournament: the C starter kit's two bots (bots/c, built with make) on the
+#    first 120 contest mazes (240 matches), `--jobs 2`, with and without the sandbox, in
+#    turn 3 times: wall time and the CPU the whole machine was busy (/proc/stat: the
+#    kernel's own work for the sandbox, e.g. a network namespace's clean-up, is done by
+#    kernel threads outside the match's processes).
 #
-#   bash benches/sandbox_cost.sh [RUNS]      (default 11; needs gcc, bubblewrap, perf, root)
+# With BASELINE=path/to/an/earlier/mazearena, each sandboxed measure is also taken with it,
+# in turn with the others (its stages too).
+#
+#   bash benches/sandbox_cost.sh [RUNS]      (default 11; needs gcc, make, bubblewrap,
+#                                             perf, root, and ../shared/mazes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-11}
@@ -32,10 +42,11 @@ maze=$PWD/mazes/gen-16-s1.txt
 import json, sys
 path = [json.dumps(a, separators=(",", ":")) for a in json.load(sys.stdin)["actions"]]
 print("\n".join(path + ["{\"reset\":true}"] + path))' >"$tmp/bot/script.txt"
-match() { # $1: sandbox -> whole run in µs
+BASELINE=${BASELINE:-}
+match() { # $1: sandbox, $2: binary -> whole run in µs
   local a b out
   a=$(date +%s%N)
-  out=$("$bin" run --maze "$maze" --bot "./trivial_bot script.txt $IDLE" --bot-dir "$tmp/bot" \
+  out=$("${2:-$bin}" run --maze "$maze" --bot "./trivial_bot script.txt $IDLE" --bot-dir "$tmp/bot" \
     --sandbox "$1" --json 2>/dev/null)
   b=$(date +%s%N)
   grep -q '"status":"finished"' <<<"$out" || { echo "unexpected: $out" >&2; exit 1; }
@@ -43,20 +54,50 @@ match() { # $1: sandbox -> whole run in µs
 }
 for i in $(seq "$RUNS"); do
   if [ $((i % 2)) = 1 ]; then n=$(match none) f=$(match full); else f=$(match full) n=$(match none); fi
-  echo "$n $f"
+  b=0
+  [ -n "$BASELINE" ] && b=$(match full "$BASELINE")
+  echo "$n $f $b"
 done >"$tmp/whole.txt"
 
-for i in $(seq "$RUNS"); do
-  perf record -q -o "$tmp/perf.data" -e sched:sched_process_exec,sched:sched_process_exit \
-    -e sched:sched_process_fork,syscalls:sys_enter_exit_group,syscalls:sys_enter_mkdir \
-    -e syscalls:sys_enter_rmdir -- "$bin" run --maze "$maze" --bot "./trivial_bot script.txt $IDLE" \
-    --bot-dir "$tmp/bot" --sandbox full --json >/dev/null 2>&1
-  perf script -i "$tmp/perf.data" -F comm,pid,time,event 2>/dev/null >"$tmp/events.$i"
-done
+stages() { # $1: binary, $2: file prefix
+  for i in $(seq "$RUNS"); do
+    perf record -q -o "$tmp/perf.data" -e sched:sched_process_exec,sched:sched_process_exit \
+      -e sched:sched_process_fork,syscalls:sys_enter_exit_group,syscalls:sys_enter_mkdir \
+      -e syscalls:sys_enter_rmdir -- "$1" run --maze "$maze" --bot "./trivial_bot script.txt $IDLE" \
+      --bot-dir "$tmp/bot" --sandbox full --json >/dev/null 2>&1
+    perf script -i "$tmp/perf.data" -F comm,pid,time,event 2>/dev/null >"$tmp/$2.$i"
+  done
+}
+stages "$bin" events
+[ -z "$BASELINE" ] || stages "$BASELINE" before
 
-python3 - "$tmp" "$RUNS" <<'PY'
-import statistics, sys
-tmp, runs = sys.argv[1], int(sys.argv[2])
+# The tournament: the C kit's bots on the first 120 contest mazes.
+make -s -C bots/c >/dev/null
+mkdir "$tmp/mazes"
+for f in $(ls ../shared/mazes/micromouseonline/classic | head -120); do
+  ln -s "$PWD/../shared/mazes/micromouseonline/classic/$f" "$tmp/mazes/$f"
+done
+tournament() { # $1: sandbox, $2: binary -> "wall_ms busy_ms matches"
+  local a b s0 s1 busy
+  rm -f "$tmp"/t.db*
+  s0=($(head -1 /proc/stat))
+  a=$(date +%s%N)
+  "$2" tournament --bots bots/c --mazes "$tmp/mazes" --jobs 2 --sandbox "$1" \
+    --database "sqlite://$tmp/t.db" --json >"$tmp/t.json" 2>/dev/null
+  b=$(date +%s%N)
+  s1=($(head -1 /proc/stat))
+  busy=$(( (s1[1] + s1[2] + s1[3] + s1[6] + s1[7]) - (s0[1] + s0[2] + s0[3] + s0[6] + s0[7]) ))
+  echo "$(( (b - a) / 1000000 )) $(( busy * 1000 / $(getconf CLK_TCK) )) $(python3 -c 'import json,sys; print(len(json.load(open(sys.argv[1]))["matches"]))' "$tmp/t.json")"
+}
+for i in 1 2 3; do
+  echo "none $(tournament none "$bin")"
+  echo "full $(tournament full "$bin")"
+  [ -z "$BASELINE" ] || echo "before $(tournament full "$BASELINE")"
+done >"$tmp/tournament.txt"
+
+python3 - "$tmp" "$RUNS" "$BASELINE" <<'PY'
+import os, statistics, sys
+tmp, runs, baseline = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 whole = [tuple(int(x) for x in l.split()) for l in open(f"{tmp}/whole.txt")]
 med = statistics.median
 none, full = med(w[0] for w in whole), med(w[1] for w in whole)
@@ -66,6 +107,9 @@ print("|---|---:|")
 print(f"| `mazearena run`, 100 steps, `--sandbox none` | {none / 1000:.2f} |")
 print(f"| `mazearena run`, 100 steps, `--sandbox full` | {full / 1000:.2f} |")
 print(f"| the sandbox's cost per match (paired differences) | **{cost / 1000:.2f}** |")
+if baseline:
+    print(f"| `--sandbox full`, the baseline binary | {med(w[2] for w in whole) / 1000:.2f} |")
+    print(f"| the baseline's cost per match (paired differences) | {med(w[2] - w[0] for w in whole) / 1000:.2f} |")
 print()
 
 def stages(path):
@@ -110,9 +154,25 @@ def stages(path):
     }
 
 rows = [stages(f"{tmp}/events.{i}") for i in range(1, runs + 1)]
-print(f"| stage of a sandboxed 100-step run ({runs} runs, medians) | ms |")
-print("|---|---:|")
+before = [stages(f"{tmp}/before.{i}") for i in range(1, runs + 1)] if baseline else None
+print(f"| stage of a sandboxed 100-step run ({runs} runs, medians) | ms |" + (" baseline (ms) |" if before else ""))
+print("|---|---:|" + ("---:|" if before else ""))
 for k in rows[0]:
-    print(f"| {k} | {med(r[k] for r in rows) * 1000:.2f} |")
-print(f"| the whole run, by the trace | {med(sum(r.values()) for r in rows) * 1000:.2f} |")
+    b = f" {med(r[k] for r in before) * 1000:.2f} |" if before else ""
+    print(f"| {k} | {med(r[k] for r in rows) * 1000:.2f} |{b}")
+b = f" {med(sum(r.values()) for r in before) * 1000:.2f} |" if before else ""
+print(f"| the whole run, by the trace | {med(sum(r.values()) for r in rows) * 1000:.2f} |{b}")
+print()
+t = {}
+for line in open(f"{tmp}/tournament.txt"):
+    k, *v = line.split()
+    t.setdefault(k, []).append([int(x) for x in v])
+print(f"| tournament: C kit, 240 matches, `--jobs 2` ({len(t['none'])} runs each, in turn, medians) | wall (s) | matches/s | × without the sandbox | machine busy (CPU s) |")
+print("|---|---:|---:|---:|---:|")
+base = med(r[0] for r in t["none"])
+names = {"none": "`--sandbox none`", "full": "`--sandbox full`", "before": "`--sandbox full`, the baseline binary"}
+for k in t:
+    wall = med(r[0] for r in t[k])
+    n = t[k][0][2]
+    print(f"| {names[k]} | {wall / 1000:.2f} | {n / wall * 1000:.0f} | {base / wall:.2f} | {med(r[1] for r in t[k]) / 1000:.2f} |")
 PY

@@ -124,7 +124,11 @@ mod tests {
         };
         let reason = exec(&args);
         assert!(reason.contains("threads"), "{reason}");
-        assert_eq!(std::fs::read_to_string(&tasks).unwrap(), "", "nothing joined");
+        assert_eq!(
+            std::fs::read_to_string(&tasks).unwrap(),
+            "",
+            "nothing joined"
+        );
         assert!(!marker.exists());
     }
 

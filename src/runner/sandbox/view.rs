@@ -5,6 +5,10 @@ use std::path::{Path, PathBuf};
 
 use super::{FullSandbox, HELPER_IN_SANDBOX, jail::SCRATCH};
 
+/// Where a match's bot folder is mounted, read-only; its working directory links to
+/// each entry.
+pub const BOT_FILES: &str = "/run/mazearena/bot";
+
 /// Top-level system folders: mounted read-only, or re-created as the same symlinks
 /// (merged-/usr systems).
 const SYSTEM_DIRS: &[&str] = &["/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32"];
@@ -361,9 +365,10 @@ pub fn describe(runtimes: &[Runtime]) -> Vec<(String, String)> {
         SCRATCH.into(),
         "scratch tmpfs of the match's size: tmp/ and work/".into(),
     ));
+    out.push((BOT_FILES.into(), "the bot's own files, read-only".into()));
     out.push((
         format!("{SCRATCH}/work"),
-        "the bot's own files, read-only, as its working directory".into(),
+        format!("the working directory: a link to each of the bot's files in {BOT_FILES}"),
     ));
     out.push(("/tmp".into(), format!("link to {SCRATCH}/tmp")));
     out.push((
@@ -490,14 +495,30 @@ pub fn bwrap_args(
     if let (Some(dir), true) = (bot_dir, writable) {
         push(&[&"--bind", &dir, &work]);
     } else if let Some(dir) = bot_dir {
+        // The folder is mounted once, read-only, and each of its entries is a link to it
+        // in the (writable) working directory: one mount a match rather than one an
+        // entry, each of which bubblewrap pays for by reading the whole mount table
+        // (BENCHMARKS.md, "The sandbox's cost per match"). An entry that is itself a
+        // link (a local run's) is mounted as before, so that it reaches what it names;
+        // so is every entry of a folder the match's own uid may not pass through (a
+        // local run's private folder).
+        use std::os::unix::fs::PermissionsExt;
+        let passable = !own_uid || std::fs::metadata(dir)?.permissions().mode() & 0o001 != 0;
+        if passable {
+            push(&[&"--ro-bind", &dir, &BOT_FILES]);
+        }
         let mut entries: Vec<_> = std::fs::read_dir(dir)?
             .filter_map(Result::ok)
-            .map(|e| e.file_name())
+            .map(|e| (e.file_name(), e.file_type().is_ok_and(|t| t.is_symlink())))
             .collect();
         entries.sort();
-        for name in entries {
+        for (name, link) in entries {
             let dest = Path::new(&work).join(&name);
-            push(&[&"--ro-bind", &dir.join(&name), &dest]);
+            if link || !passable {
+                push(&[&"--ro-bind", &dir.join(&name), &dest]);
+            } else {
+                push(&[&"--symlink", &Path::new(BOT_FILES).join(&name), &dest]);
+            }
         }
     }
     if own_uid {
@@ -515,7 +536,7 @@ pub fn bwrap_args(
         .iter()
         .map(PathBuf::from)
         .chain(runtimes.iter().map(|r| mount_point(&r.prefix)))
-        .chain([PathBuf::from(HELPER_IN_SANDBOX)]);
+        .chain([PathBuf::from(HELPER_IN_SANDBOX), PathBuf::from(BOT_FILES)]);
     for dest in dests {
         for a in dest.ancestors().skip(1) {
             if a != Path::new("/") && !parents.iter().any(|p| p == a) {
@@ -611,6 +632,70 @@ mod tests {
                 .unwrap()
                 .is_empty()
         );
+    }
+
+    /// The bubblewrap words of a match's view of `dir`, as root or not.
+    fn match_words(dir: &Path, as_root: bool) -> Vec<String> {
+        let full = FullSandbox {
+            bwrap: "/usr/bin/bwrap".into(),
+            helper: "/usr/bin/true".into(),
+            as_root,
+            cgroups: Err("none in this test".into()),
+            runtimes: Vec::new(),
+            detect: false,
+            hide: Vec::new(),
+            detected: Default::default(),
+        };
+        bwrap_args(&full, Some(dir), 1 << 20, Work::Match, &[])
+            .unwrap()
+            .into_iter()
+            .map(|w| w.to_string_lossy().into_owned())
+            .collect()
+    }
+
+    /// `words` holds `triple` in a row.
+    fn has(words: &[String], triple: [&str; 3]) -> bool {
+        words.windows(3).any(|w| w == triple)
+    }
+
+    #[test]
+    fn a_bots_folder_is_one_mount_and_links_unless_its_uid_cannot_pass_through_it() {
+        use std::os::unix::fs::PermissionsExt;
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("bot");
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::write(dir.join("bot.py"), "").unwrap();
+        std::fs::write(tmp.path().join("shared.py"), "").unwrap();
+        std::os::unix::fs::symlink(tmp.path().join("shared.py"), dir.join("shared.py")).unwrap();
+        let d = dir.display().to_string();
+        let (bot, shared) = (format!("{d}/bot.py"), format!("{d}/shared.py"));
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+        for as_root in [true, false] {
+            let words = match_words(&dir, as_root);
+            assert!(has(&words, ["--ro-bind", &d, BOT_FILES]), "{words:?}");
+            let link = format!("{BOT_FILES}/bot.py");
+            assert!(
+                has(&words, ["--symlink", &link, "/sandbox/work/bot.py"]),
+                "{words:?}"
+            );
+            // A link of the folder's is mounted: it reaches what it names.
+            assert!(
+                has(&words, ["--ro-bind", &shared, "/sandbox/work/shared.py"]),
+                "{words:?}"
+            );
+            assert!(!words.contains(&bot), "{words:?}");
+        }
+        // A private folder: the match's own uid could not pass through it.
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).unwrap();
+        let words = match_words(&dir, true);
+        assert!(!words.iter().any(|w| w == BOT_FILES), "{words:?}");
+        assert!(
+            has(&words, ["--ro-bind", &bot, "/sandbox/work/bot.py"]),
+            "{words:?}"
+        );
+        // Without root the bot runs as the folder's owner, who may.
+        let words = match_words(&dir, false);
+        assert!(has(&words, ["--ro-bind", &d, BOT_FILES]), "{words:?}");
     }
 
     #[test]
