@@ -462,6 +462,8 @@ fn tournaments_survive_killed_servers_workers_and_database() {
                 data,
                 "--lease-secs",
                 LEASE_SECS,
+                "--max-retries",
+                MAX_RETRIES,
             ])
         };
         let mut api = args(&["serve", "--jobs", "0", "--bind", &site.bind]);
