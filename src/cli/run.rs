@@ -152,7 +152,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         MatchStatus::Finished | MatchStatus::StepLimit
     ) {
         // A bot that failed in a sandbox that does not work here is not the bot's fault.
-        super::sandbox::SandboxArgs::verify(&sandbox)?;
+        super::sandbox::verify(&sandbox)?;
     }
     let mut record = record;
     record.maze_layout = Some(crate::engine::mazefile::numeric::write(&maze));

@@ -61,21 +61,12 @@ impl SandboxArgs {
 
     /// [`SandboxArgs::open`] without the test command (see
     /// [`Sandbox::full_unverified`]): for one match, which is followed by
-    /// [`SandboxArgs::verify`] when it fails.
+    /// [`verify`] when it fails.
     ///
     /// # Errors
     /// As [`SandboxArgs::open`], except for the test command's.
     pub fn open_unverified(&self, hide: &[PathBuf], local: bool) -> anyhow::Result<Sandbox> {
         self.open_checked(hide, local, false)
-    }
-
-    /// Runs the sandbox's test command: `Err` with the reason when the sandbox does not
-    /// work here, worded as [`SandboxArgs::open`]'s.
-    ///
-    /// # Errors
-    /// The sandbox does not work here.
-    pub fn verify(sandbox: &Sandbox) -> anyhow::Result<()> {
-        sandbox.verify().map_err(unavailable)
     }
 
     fn open_checked(&self, hide: &[PathBuf], local: bool, test: bool) -> anyhow::Result<Sandbox> {
@@ -98,6 +89,15 @@ impl SandboxArgs {
             }
         }
     }
+}
+
+/// Runs the sandbox's test command: `Err` with the reason when the sandbox does not
+/// work here, worded as [`SandboxArgs::open`]'s.
+///
+/// # Errors
+/// The sandbox does not work here.
+pub fn verify(sandbox: &Sandbox) -> anyhow::Result<()> {
+    sandbox.verify().map_err(unavailable)
 }
 
 /// The sandbox's reason, with what to do about it.

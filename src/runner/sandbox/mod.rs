@@ -204,17 +204,6 @@ impl Sandbox {
         Sandbox::full_tested(helper, setup).map(|(sandbox, _)| sandbox)
     }
 
-    /// [`Sandbox::full`] without the test command, for one match that proves the sandbox
-    /// itself (`mazearena run`): every wall is still made, and the jail still refuses to
-    /// run the bot when one cannot be; a match that fails is followed by
-    /// [`Sandbox::verify`], so a sandbox that does not work is reported as such.
-    ///
-    /// # Errors
-    /// As [`Sandbox::full`], except for the test command's.
-    pub fn full_unverified(helper: &Path, setup: &Setup) -> Result<Sandbox, Unavailable> {
-        Sandbox::prepare(helper, setup)
-    }
-
     /// Runs the test command in the sandbox and checks what it saw (`NoNewPrivs`,
     /// `Seccomp`); `Ok` for no sandbox.
     ///
@@ -229,7 +218,7 @@ impl Sandbox {
 
     /// [`Sandbox::full`], with the fields of `/proc/self/status` its test command saw.
     fn full_tested(helper: &Path, setup: &Setup) -> Result<(Sandbox, Status), Unavailable> {
-        let sandbox = Sandbox::prepare(helper, setup)?;
+        let sandbox = Sandbox::full_unverified(helper, setup)?;
         let status = sandbox.checked_status()?;
         Ok((sandbox, status))
     }
@@ -248,8 +237,15 @@ impl Sandbox {
         Ok(status)
     }
 
-    /// Finds bubblewrap, the cgroups and the runtimes: the sandbox, not yet tested.
-    fn prepare(helper: &Path, setup: &Setup) -> Result<Sandbox, Unavailable> {
+    /// [`Sandbox::full`] without the test command: bubblewrap, the cgroups and the
+    /// runtimes found, for one match that proves the sandbox itself (`mazearena run`).
+    /// Every wall is still made, and the jail still refuses to run the bot when one
+    /// cannot be; a match that fails is followed by [`Sandbox::verify`], so a sandbox
+    /// that does not work is reported as such.
+    ///
+    /// # Errors
+    /// As [`Sandbox::full`], except for the test command's.
+    pub fn full_unverified(helper: &Path, setup: &Setup) -> Result<Sandbox, Unavailable> {
         let bwrap = find_program("bwrap").ok_or_else(|| {
             Unavailable(
                 "bubblewrap (`bwrap`) is not installed (Debian: apt-get install bubblewrap)".into(),
@@ -447,16 +443,7 @@ pub fn find_program(name: &str) -> Option<PathBuf> {
 }
 
 pub(crate) use view::bwrap_args;
-pub use view::{Runtime, Work, runtime_of_program};
-
-/// The operator's runtimes (`--runtime`) as a sandbox would mount them, for a process
-/// that runs no bot but says what its workers offer (`serve --jobs 0`).
-///
-/// # Errors
-/// A listed folder cannot be offered (missing, a home folder, holds `hide`).
-pub fn listed_runtimes(listed: &[PathBuf], hide: &[PathBuf]) -> Result<Vec<Runtime>, String> {
-    view::listed_runtimes(listed, hide)
-}
+pub use view::{Runtime, Work, listed_runtimes, runtime_of_program};
 
 impl FullSandbox {
     /// The runtimes mounted for a bot or build whose program is `program`: the
