@@ -78,13 +78,15 @@ pub enum Command {
 /// cgroup join before it: [`sandbox::sandbox_enter`]). Neither returns, unless it failed;
 /// `None` for every other command line.
 pub fn sandbox_exec_if_asked() -> Option<std::process::ExitCode> {
-    use crate::runner::sandbox::{ENTER_SUBCOMMAND, JAIL_SUBCOMMAND};
+    use crate::runner::sandbox::{ENTER_SUBCOMMAND, JAIL_SUBCOMMAND, SERVE_SUBCOMMAND};
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
     let step = args.get(1)?;
     if step == JAIL_SUBCOMMAND {
         Some(sandbox::sandbox_exec(&args[2..]))
     } else if step == ENTER_SUBCOMMAND {
         Some(sandbox::sandbox_enter(&args[2..]))
+    } else if step == SERVE_SUBCOMMAND {
+        Some(sandbox::sandbox_serve())
     } else {
         None
     }

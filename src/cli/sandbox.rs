@@ -48,6 +48,7 @@ impl SandboxArgs {
             hide: hide.to_vec(),
             runtimes: self.runtimes.clone(),
             detect: local,
+            reuse: false,
         }
     }
 
@@ -79,7 +80,10 @@ impl SandboxArgs {
             }
             SandboxChoice::Full => {
                 let exe = std::env::current_exe().context("cannot find the mazearena binary")?;
-                let setup = self.setup(hide, local);
+                let mut setup = self.setup(hide, local);
+                // A runner that tests the sandbox first plays many matches (a server, a
+                // worker, a tournament): it keeps warm sandboxes for them.
+                setup.reuse = test;
                 if test {
                     Sandbox::full(&exe, &setup)
                 } else {
@@ -166,6 +170,15 @@ pub fn sandbox_enter(args: &[std::ffi::OsString]) -> std::process::ExitCode {
         Ok(a) => enter::exec(&a),
         Err(e) => e,
     })
+}
+
+/// `mazearena sandbox-serve`: a warm sandbox's supervisor (not for people). Ends when
+/// the runner closes its socket; on failure with [`jail::SETUP_FAILED`].
+pub fn sandbox_serve() -> std::process::ExitCode {
+    match crate::runner::sandbox::supervisor::serve() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => setup_failed(e),
+    }
 }
 
 /// A sandbox step's end when it could not run the bot: the line the runner reads the

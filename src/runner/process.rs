@@ -13,7 +13,8 @@ use nix::unistd::Pid;
 use tokio::process::{Child, Command};
 
 use super::sandbox::cgroup::{CgroupHit, CgroupLimits, MatchCgroup};
-use super::sandbox::{Sandbox, UidLease, jail, proctree};
+use super::sandbox::warm::{self, WarmMatch};
+use super::sandbox::{Sandbox, UidLease, jail, proctree, supervisor};
 
 /// Environment variables passed through to bots run without the sandbox; everything
 /// else is cleared so a bot sees the same environment under the CLI and the server.
@@ -91,13 +92,36 @@ pub enum LimitKind {
     Scratch,
 }
 
-/// A running bot: the child process and everything that bounds and measures it.
+/// What the runner writes the bot's stdin through.
+pub type BotStdin = Box<dyn tokio::io::AsyncWrite + Send + Unpin>;
+
+/// What the runner reads the bot's stdout or stderr through.
+pub type BotOutput = Box<dyn tokio::io::AsyncRead + Send + Unpin>;
+
+/// How the bot's processes were started.
+enum Started {
+    /// A child of the runner: the bot itself, or a one-shot sandbox (bubblewrap).
+    Child(Child),
+    /// A match in a warm sandbox, with the runner's ends of its pipes until taken.
+    Warm(Box<WarmMatch>, Option<(BotStdin, BotOutput, BotOutput)>),
+}
+
+impl std::fmt::Debug for Started {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Started::Child(child) => f.debug_tuple("Child").field(child).finish(),
+            Started::Warm(warm, _) => f.debug_tuple("Warm").field(warm).finish(),
+        }
+    }
+}
+
+/// A running bot: its processes and everything that bounds and measures them.
 /// Dropping it kills every process of the bot.
 #[derive(Debug)]
 pub struct BotProcess {
-    /// The direct child (bubblewrap in the sandbox).
-    pub child: Child,
-    /// Its pid, also its process group id.
+    started: Started,
+    /// The outer process's pid, also its process group id (in a warm sandbox: the
+    /// match's init).
     pub pid: Option<u32>,
     cgroup: Option<MatchCgroup>,
     _uid: Option<UidLease>,
@@ -132,6 +156,14 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
             let runtimes = full
                 .runtimes_for(&words[0], launch.dir, launch.runtime)
                 .map_err(LaunchError::Sandbox)?;
+            let spawn_error = |source| LaunchError::Spawn {
+                program: words[0].clone(),
+                dir: launch.dir.display().to_string(),
+                source,
+            };
+            if let Some(entries) = warm::plan(full, launch.dir, &runtimes).map_err(spawn_error)? {
+                return spawn_warm(launch, &words, full, runtimes, entries, uid);
+            }
             let cgroup = match &full.cgroups {
                 Ok(root) => Some(
                     root.create(CgroupLimits {
@@ -156,28 +188,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 dir: launch.dir.display().to_string(),
                 source: e,
             })?;
-            let jail = jail::JailArgs {
-                uid: uid.as_ref().map(UidLease::uid),
-                // With a cgroup, its count is the limit that is seen being hit; the
-                // uid's own count stays a little above it as a second wall.
-                nproc: launch.process_limit.map(|n| {
-                    if cgroup.is_some() {
-                        n + 2 * BWRAP_PROCESSES
-                    } else {
-                        n
-                    }
-                }),
-                fsize: Some(launch.scratch_bytes),
-                address_space: None,
-                env: launch
-                    .env
-                    .iter()
-                    .map(|(k, v)| (k.into(), v.into()))
-                    .collect(),
-                command: std::iter::once(in_sandbox(&words[0], launch.dir))
-                    .chain(words[1..].iter().map(Into::into))
-                    .collect(),
-            };
+            let jail = jail_args(launch, &words, uid.as_ref(), cgroup.is_some());
             let cmd = full.command(args, &jail, cgroup.as_ref());
             (Command::from(cmd), cgroup, uid)
         }
@@ -205,10 +216,105 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
     }
     Ok(BotProcess {
         pid: child.id(),
-        child,
+        started: Started::Child(child),
         cgroup,
         _uid: uid,
         sandboxed: matches!(launch.sandbox, Sandbox::Full(_)),
+        memory_limit: launch.memory_limit_bytes,
+        process_limit: launch.process_limit,
+        scratch: std::sync::OnceLock::new(),
+        cpu_clock: std::sync::OnceLock::new(),
+    })
+}
+
+/// The jail step's arguments for the bot's command `words`: its uid (as root), its
+/// limits and its owner's variables. With a cgroup, the cgroup's process count is the
+/// limit that is seen being hit; the uid's own count stays a little above it as a
+/// second wall.
+fn jail_args(
+    launch: &Launch<'_>,
+    words: &[String],
+    uid: Option<&UidLease>,
+    cgroup: bool,
+) -> jail::JailArgs {
+    jail::JailArgs {
+        uid: uid.map(UidLease::uid),
+        nproc: launch
+            .process_limit
+            .map(|n| if cgroup { n + 2 * BWRAP_PROCESSES } else { n }),
+        fsize: Some(launch.scratch_bytes),
+        address_space: None,
+        env: launch
+            .env
+            .iter()
+            .map(|(k, v)| (k.into(), v.into()))
+            .collect(),
+        command: std::iter::once(in_sandbox(&words[0], launch.dir))
+            .chain(words[1..].iter().map(Into::into))
+            .collect(),
+    }
+}
+
+/// Starts the bot in a warm sandbox ([`warm`]) of `full`, with `entries` of its folder
+/// linked in its working directory.
+fn spawn_warm(
+    launch: &Launch<'_>,
+    words: &[String],
+    full: &std::sync::Arc<super::sandbox::FullSandbox>,
+    runtimes: Vec<super::sandbox::Runtime>,
+    entries: Vec<std::ffi::OsString>,
+    uid: Option<UidLease>,
+) -> Result<BotProcess, LaunchError> {
+    use std::os::unix::ffi::OsStringExt;
+    let sandbox_error = |e: String| LaunchError::Sandbox(e);
+    let pipe = || {
+        nix::unistd::pipe2(nix::fcntl::OFlag::O_CLOEXEC)
+            .map_err(|e| sandbox_error(format!("pipe: {e}")))
+    };
+    let (stdin_bot, stdin_ours) = pipe()?;
+    let (stdout_ours, stdout_bot) = pipe()?;
+    let (stderr_ours, stderr_bot) = pipe()?;
+    let request = supervisor::Request {
+        scratch_bytes: launch.scratch_bytes,
+        entries: entries.into_iter().map(OsStringExt::into_vec).collect(),
+        jail: jail_args(launch, words, uid.as_ref(), true)
+            .to_args()
+            .into_iter()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect(),
+    };
+    let key = warm::WarmKey {
+        // Started from the match's thread: its core is the match's.
+        core: super::affinity::pinned_core(),
+        runtimes,
+    };
+    let warm = warm::start_match(
+        full,
+        key,
+        launch.memory_limit_bytes,
+        launch.process_limit.map(|n| n + warm::WARM_PROCESSES),
+        &request,
+        launch.dir,
+        warm::MatchStdio {
+            stdin: stdin_bot,
+            stdout: stdout_bot,
+            stderr: stderr_bot,
+        },
+    )
+    .map_err(sandbox_error)?;
+    let io = |e: std::io::Error| sandbox_error(format!("the bot's pipes: {e}"));
+    let stdin: BotStdin =
+        Box::new(tokio::net::unix::pipe::Sender::from_owned_fd(stdin_ours).map_err(io)?);
+    let stdout: BotOutput =
+        Box::new(tokio::net::unix::pipe::Receiver::from_owned_fd(stdout_ours).map_err(io)?);
+    let stderr: BotOutput =
+        Box::new(tokio::net::unix::pipe::Receiver::from_owned_fd(stderr_ours).map_err(io)?);
+    Ok(BotProcess {
+        pid: Some(warm.init_pid),
+        started: Started::Warm(Box::new(warm), Some((stdin, stdout, stderr))),
+        cgroup: None,
+        _uid: uid,
+        sandboxed: true,
         memory_limit: launch.memory_limit_bytes,
         process_limit: launch.process_limit,
         scratch: std::sync::OnceLock::new(),
@@ -293,10 +399,42 @@ fn direct(launch: &Launch<'_>, words: &[String]) -> Command {
 }
 
 impl BotProcess {
+    /// The runner's ends of the bot's stdin, stdout and stderr (once).
+    pub fn take_stdio(&mut self) -> Option<(BotStdin, BotOutput, BotOutput)> {
+        match &mut self.started {
+            Started::Child(child) => {
+                let stdin: BotStdin = Box::new(child.stdin.take()?);
+                let stdout: BotOutput = Box::new(child.stdout.take()?);
+                let stderr: BotOutput = Box::new(child.stderr.take()?);
+                Some((stdin, stdout, stderr))
+            }
+            Started::Warm(_, stdio) => stdio.take(),
+        }
+    }
+
+    /// Waits for the outer process to end: its exit status.
+    ///
+    /// # Errors
+    /// Waiting failed.
+    pub async fn wait(&mut self) -> std::io::Result<std::process::ExitStatus> {
+        match &mut self.started {
+            Started::Child(child) => child.wait().await,
+            Started::Warm(warm, _) => warm.wait().await,
+        }
+    }
+
+    /// The match's cgroup, if it has one.
+    fn cgroup(&self) -> Option<&MatchCgroup> {
+        match &self.started {
+            Started::Warm(warm, _) => warm.cgroup(),
+            Started::Child(_) => self.cgroup.as_ref(),
+        }
+    }
+
     /// CPU time of all the bot's processes so far, in microseconds: the cgroup's
     /// counter, else the sum over its live process tree (with waited-for children).
     pub fn cpu_us(&self) -> Option<u64> {
-        match (&self.cgroup, self.pid) {
+        match (self.cgroup(), self.pid) {
             (Some(cg), _) => cg.cpu_us(),
             // The sandbox without a cgroup: the whole tree (PID namespace: nothing escapes).
             (None, Some(pid)) if self.sandboxed => Some(proctree::usage(pid).cpu_us),
@@ -319,7 +457,7 @@ impl BotProcess {
         if !self.sandboxed {
             return None;
         }
-        if let Some(cg) = &self.cgroup {
+        if let Some(cg) = self.cgroup() {
             return match cg.limit_hit() {
                 Some(CgroupHit::Memory) => Some(LimitKind::Memory),
                 Some(CgroupHit::Pids) => Some(LimitKind::Processes),
@@ -346,8 +484,18 @@ impl BotProcess {
     /// a process inside the sandbox.
     fn scratch_full(&self) -> bool {
         if self.scratch.get().is_none() {
-            let members = self.pid.map(proctree::members).unwrap_or_default();
-            let Some(inner) = members.get(1) else {
+            // In a warm sandbox the match's init holds the scratch area; in a one-shot
+            // one, bubblewrap's process inside.
+            let inner = match &self.started {
+                Started::Warm(warm, _) => Some(warm.init_pid),
+                Started::Child(_) => self
+                    .pid
+                    .map(proctree::members)
+                    .unwrap_or_default()
+                    .get(1)
+                    .copied(),
+            };
+            let Some(inner) = inner else {
                 return false;
             };
             let _ = self.scratch.set(PathBuf::from(format!(
@@ -362,6 +510,10 @@ impl BotProcess {
 
     /// Kills every process of the bot: its cgroup, its process tree and its group.
     pub fn kill_all(&self) {
+        // A warm sandbox's cgroup holds the sandbox too: the match goes with its init.
+        if let Started::Warm(warm, _) = &self.started {
+            warm.kill();
+        }
         if let Some(cg) = &self.cgroup {
             cg.kill_all();
         }
@@ -438,7 +590,7 @@ mod tests {
         let pid = bot.pid.unwrap();
         let limits = std::fs::read_to_string(format!("/proc/{pid}/limits")).unwrap();
         bot.kill_all();
-        let _ = bot.child.wait().await;
+        let _ = bot.wait().await;
         let line = |name: &str| {
             limits
                 .lines()

@@ -5,13 +5,12 @@
 use std::time::{Duration, Instant};
 
 use tokio::io::AsyncWriteExt;
-use tokio::process::ChildStdin;
 use tokio::time::timeout_at;
 use tokio_util::codec::AnyDelimiterCodecError;
 
 use super::framing;
 use super::outcome::{Failure, LimitHit, MatchStatus};
-use super::process::{self, BotProcess, LimitKind};
+use super::process::{self, BotOutput, BotProcess, BotStdin, LimitKind};
 use super::{EXIT_GRACE, Limits};
 use crate::engine::Action;
 use crate::engine::game::Sense;
@@ -59,9 +58,9 @@ pub struct Ended {
 /// A running bot and its pipes.
 pub struct Session {
     process: BotProcess,
-    stdin: ChildStdin,
-    replies: framing::ReplyReader<tokio::process::ChildStdout>,
-    stderr: framing::StderrReader<tokio::process::ChildStderr>,
+    stdin: BotStdin,
+    replies: framing::ReplyReader<BotOutput>,
+    stderr: framing::StderrReader<BotOutput>,
     started: Instant,
     limits: Limits,
     cpu_mark: Option<u64>,
@@ -87,21 +86,9 @@ impl Session {
             })
         })?;
         // The pipes were requested in `spawn`; their absence would be a bug there.
-        let stdin = process
-            .child
-            .stdin
-            .take()
-            .expect("stdin is piped by process::spawn");
-        let stdout = process
-            .child
-            .stdout
-            .take()
-            .expect("stdout is piped by process::spawn");
-        let stderr = process
-            .child
-            .stderr
-            .take()
-            .expect("stderr is piped by process::spawn");
+        let (stdin, stdout, stderr) = process
+            .take_stdio()
+            .expect("the pipes are made by process::spawn");
         let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         Ok(Session {
@@ -255,7 +242,7 @@ impl Session {
         let _ = send(&mut self.stdin, end, Some(grace)).await;
         drop(self.stdin);
         // Its stderr is read meanwhile: a bot blocked on a full pipe could not exit.
-        let exited = self.stderr.drain_while(self.process.child.wait());
+        let exited = self.stderr.drain_while(self.process.wait());
         let status = timeout_at(grace, exited).await.ok().and_then(Result::ok);
         let cpu_us = match (cpu_before, self.process.cpu_us()) {
             (Some(a), Some(b)) => Some(a.max(b)),
@@ -265,7 +252,7 @@ impl Session {
         self.process.kill_all();
         let exit = match status {
             Some(s) => Some(s),
-            None => self.process.child.wait().await.ok(),
+            None => self.process.wait().await.ok(),
         };
         let (stderr_tail, late_stderr) = self.stderr.finish(EXIT_GRACE).await;
         Ended {
@@ -327,7 +314,7 @@ fn protocol_fault(e: ProtocolError, line: &[u8], step: u32) -> Verdict {
 
 /// Writes one message line to the bot, within `deadline` if given.
 async fn send(
-    stdin: &mut ChildStdin,
+    stdin: &mut BotStdin,
     message: &ServerMessage,
     deadline: Option<tokio::time::Instant>,
 ) -> std::io::Result<()> {

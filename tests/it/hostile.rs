@@ -445,3 +445,96 @@ async fn an_api_only_server_needs_no_sandbox_and_one_that_plays_refuses_without_
     );
     assert_eq!(health["workers"], json!([]), "{health}");
 }
+
+/// A runner of many matches keeps a warm sandbox for them (servers, workers,
+/// tournaments): every attack that tries to carry something from one match to the next
+/// finds nothing, and no limit hit or CPU time of a match shows in the next one's
+/// record, while the same sandbox plays them all.
+#[tokio::test]
+async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
+    use mazearena::runner::sandbox::Setup;
+    use mazearena::runner::{BotSpec, Limits, MatchStatus, run_match};
+    let Some(_) = full_sandbox("hostile warm") else {
+        return;
+    };
+    if !nix::unistd::geteuid().is_root() {
+        eprintln!("SKIPPED hostile warm: warm sandboxes are used by a runner that is root");
+        return;
+    }
+    let warm = mazearena::runner::Sandbox::full(
+        Path::new(env!("CARGO_BIN_EXE_mazearena")),
+        &Setup {
+            reuse: true,
+            ..Setup::default()
+        },
+    )
+    .unwrap();
+    let mazearena::runner::Sandbox::Full(full) = &warm else {
+        unreachable!("a full sandbox was asked for")
+    };
+    let limits = Limits {
+        memory_limit_mb: Some(256),
+        process_limit: Some(32),
+        ..Limits::default()
+    };
+    let maze = crate::support::classic(1);
+    let mut supervisor: Option<Vec<u32>> = None;
+    let mut play = async |script: &str| {
+        let bot = BotSpec::new(format!("python3 {script}"), root().join(HOSTILE));
+        let r = run_match(&bot, &maze, 0, limits, &warm, |_| {}).await;
+        // One warm sandbox plays every match: the same supervisor, nothing else idle.
+        assert_eq!(full.warm.idle(), 1, "one warm sandbox, reused");
+        let serving = processes_matching("sandbox-serve");
+        match &supervisor {
+            None => supervisor = Some(serving),
+            Some(first) => assert_eq!(&serving, first, "the same warm sandbox"),
+        }
+        assert!(processes_matching("carry-over-daemon").is_empty());
+        r
+    };
+    for round in 0..2 {
+        let r = play("carry_over.py").await;
+        let log = &r.stderr_tail;
+        assert!(!log.contains("HOSTILE LEAK"), "round {round}: {log}");
+        assert!(log.contains("HOSTILE INFO none"), "round {round}: {log}");
+        assert!(log.contains("HOSTILE INFO pid=2"), "round {round}: {log}");
+        assert!(
+            log.contains("HOSTILE INFO lastpid=2"),
+            "round {round}: {log}"
+        );
+    }
+    let forks = play("fork_many.py 300").await;
+    assert_eq!(forks.status, MatchStatus::ProcessLimit, "{:?}", forks.error);
+    let after_forks = play("carry_over.py").await;
+    assert_ne!(after_forks.status, MatchStatus::ProcessLimit);
+    assert!(after_forks.stderr_tail.contains("HOSTILE INFO none"));
+    let memory = play("memory_children.py 2 200").await;
+    assert_eq!(
+        memory.status,
+        MatchStatus::MemoryLimit,
+        "{:?}",
+        memory.error
+    );
+    let after_memory = play("carry_over.py").await;
+    assert_eq!(after_memory.status, after_forks.status);
+    let spin = play("spin_children.py 2").await;
+    let after_spin = play("report_uid.py").await;
+    let (spun, quiet) = (
+        spin.timings.bot_cpu_ms.unwrap(),
+        after_spin.timings.bot_cpu_ms.unwrap(),
+    );
+    // Counted from the match's start, the quiet bot's time is its own: less than the
+    // spinning match's, which a running total would hold on top.
+    assert!(
+        quiet < spun,
+        "the spinning match's CPU time ({spun} ms) must not reach the next one ({quiet} ms)"
+    );
+    // bubblewrap's two processes and the supervisor, the same from the first match on.
+    let serving = supervisor.clone().unwrap();
+    assert_eq!(serving.len(), 3, "{serving:?}");
+    drop(warm);
+    assert!(
+        processes_matching("sandbox-serve").is_empty(),
+        "the warm sandbox ends with its runner"
+    );
+}

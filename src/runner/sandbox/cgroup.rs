@@ -195,6 +195,7 @@ impl CgroupRoot {
             pids: PathBuf::new(),
             cpu_usage: PathBuf::new(),
             cpu_counter: None,
+            marks: Marks::default(),
         };
         match self {
             CgroupRoot::V1 {
@@ -208,17 +209,7 @@ impl CgroupRoot {
                 group.pids = group.make(&pids.join(&name))?;
                 let acct = group.make(&cpuacct.join(&name))?;
                 group.cpu_usage = acct.join("cpuacct.usage");
-                if let Some(mem) = limits.memory_bytes {
-                    write(&group.memory, "memory.limit_in_bytes", mem)?;
-                    // Swap would let a bot hold more than the limit; refuse it where the
-                    // kernel accounts swap.
-                    if group.memory.join("memory.memsw.limit_in_bytes").exists() {
-                        write(&group.memory, "memory.memsw.limit_in_bytes", mem)?;
-                    }
-                }
-                if let Some(n) = limits.pids {
-                    write(&group.pids, "pids.max", n)?;
-                }
+                group.limit(limits.memory_bytes, limits.pids)?;
                 let pinned = match (limits.core, cpuset) {
                     (Some(core), Some(cpuset)) => {
                         let dir = group.make(&cpuset.join(&name))?;
@@ -242,13 +233,10 @@ impl CgroupRoot {
             }
             CgroupRoot::V2 { base } => {
                 let dir = group.make(&base.join(&name))?;
-                if let Some(mem) = limits.memory_bytes {
-                    write(&dir, "memory.max", mem)?;
-                    let _ = std::fs::write(dir.join("memory.swap.max"), "0");
-                }
-                if let Some(n) = limits.pids {
-                    write(&dir, "pids.max", n)?;
-                }
+                let _ = std::fs::write(dir.join("memory.swap.max"), "0");
+                group.memory = dir.clone();
+                group.pids = dir.clone();
+                group.limit(limits.memory_bytes, limits.pids)?;
                 // Without the cpuset controller the file is missing and the write fails.
                 let pinned = limits
                     .core
@@ -259,8 +247,6 @@ impl CgroupRoot {
                         format!("{CPU_PERIOD_US} {CPU_PERIOD_US}"),
                     );
                 }
-                group.memory = dir.clone();
-                group.pids = dir.clone();
                 group.cpu_usage = dir.join("cpu.stat");
             }
         }
@@ -314,6 +300,17 @@ pub struct MatchCgroup {
     cpu_usage: PathBuf,
     /// `cpu_usage`, kept open: it is read at every step.
     cpu_counter: Option<super::proctree::OpenCounter>,
+    /// The counters when the current match began (all zero for a cgroup of one match).
+    marks: Marks,
+}
+
+/// A reused cgroup's counters at the start of a match: the match's own are the
+/// differences.
+#[derive(Debug, Clone, Copy, Default)]
+struct Marks {
+    cpu_us: u64,
+    oom_kills: u64,
+    refused_forks: u64,
 }
 
 impl MatchCgroup {
@@ -350,30 +347,91 @@ impl MatchCgroup {
         self.dirs.iter().map(|d| d.join(file)).collect()
     }
 
-    /// CPU time used by every process that ever ran in the cgroup, in microseconds.
+    /// Sets the memory limit (resident, all processes; `None`: none) and the process
+    /// limit, for a new cgroup or for the next match of a reused one.
+    ///
+    /// # Errors
+    /// The file system errors of writing them.
+    pub fn limit(&self, memory_bytes: Option<u64>, pids: Option<u64>) -> std::io::Result<()> {
+        match self.version {
+            CgroupRoot::V1 { .. } => {
+                let mem = memory_bytes.map_or("-1".to_string(), |m| m.to_string());
+                // Swap would let a bot hold more than the limit; refuse it where the
+                // kernel accounts swap. The swap limit may never be below the memory
+                // limit: going down, the memory limit is lowered first, going up last.
+                let memsw = self.memory.join("memory.memsw.limit_in_bytes").exists();
+                let first = write_text(&self.memory, "memory.limit_in_bytes", &mem);
+                if memsw {
+                    write_text(&self.memory, "memory.memsw.limit_in_bytes", &mem)?;
+                }
+                if first.is_err() {
+                    write_text(&self.memory, "memory.limit_in_bytes", &mem)?;
+                }
+            }
+            CgroupRoot::V2 { .. } => {
+                let mem = memory_bytes.map_or("max".to_string(), |m| m.to_string());
+                write_text(&self.memory, "memory.max", &mem)?;
+            }
+        }
+        let pids = pids.map_or("max".to_string(), |n| n.to_string());
+        write_text(&self.pids, "pids.max", &pids)
+    }
+
+    /// Starts a new match in this cgroup: from now on [`MatchCgroup::cpu_us`] and
+    /// [`MatchCgroup::limit_hit`] count from here.
+    pub fn mark(&mut self) {
+        self.marks = Marks::default();
+        self.marks = Marks {
+            cpu_us: self.cpu_us().unwrap_or(0),
+            oom_kills: self.oom_kills(),
+            refused_forks: self.refused_forks(),
+        };
+    }
+
+    /// Every thread in the cgroup.
+    pub fn threads(&self) -> Vec<i32> {
+        let file = match self.version {
+            CgroupRoot::V1 { .. } => "tasks",
+            CgroupRoot::V2 { .. } => "cgroup.threads",
+        };
+        std::fs::read_to_string(self.pids.join(file))
+            .unwrap_or_default()
+            .lines()
+            .filter_map(|l| l.trim().parse().ok())
+            .collect()
+    }
+
+    fn oom_kills(&self) -> u64 {
+        let file = match self.version {
+            CgroupRoot::V1 { .. } => "memory.oom_control",
+            CgroupRoot::V2 { .. } => "memory.events",
+        };
+        read_counter(&self.memory.join(file), "oom_kill").unwrap_or(0)
+    }
+
+    fn refused_forks(&self) -> u64 {
+        read_counter(&self.pids.join("pids.events"), "max").unwrap_or(0)
+    }
+
+    /// CPU time used by every process that ran in the cgroup in this match, in µs.
     pub fn cpu_us(&self) -> Option<u64> {
         let text = match &self.cpu_counter {
             Some(counter) => counter.read()?,
             None => std::fs::read_to_string(&self.cpu_usage).ok()?,
         };
-        match self.version {
+        let total = match self.version {
             CgroupRoot::V1 { .. } => text.trim().parse::<u64>().ok().map(|ns| ns / 1000),
             CgroupRoot::V2 { .. } => counter(&text, "usage_usec"),
-        }
+        }?;
+        Some(total.saturating_sub(self.marks.cpu_us))
     }
 
     /// The first limit found hit, if any: an OOM kill, or a refused fork.
     pub fn limit_hit(&self) -> Option<CgroupHit> {
-        let oom = match self.version {
-            CgroupRoot::V1 { .. } => {
-                read_counter(&self.memory.join("memory.oom_control"), "oom_kill")
-            }
-            CgroupRoot::V2 { .. } => read_counter(&self.memory.join("memory.events"), "oom_kill"),
-        };
-        if oom.unwrap_or(0) > 0 {
+        if self.oom_kills() > self.marks.oom_kills {
             return Some(CgroupHit::Memory);
         }
-        if read_counter(&self.pids.join("pids.events"), "max").unwrap_or(0) > 0 {
+        if self.refused_forks() > self.marks.refused_forks {
             return Some(CgroupHit::Pids);
         }
         None

@@ -17,8 +17,10 @@ pub mod enter;
 pub mod jail;
 pub mod proctree;
 pub mod seccomp;
+pub mod supervisor;
 mod uid;
 mod view;
+pub mod warm;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -39,6 +41,9 @@ pub const JAIL_SUBCOMMAND: &str = "sandbox-exec";
 
 /// The subcommand of the helper that runs [`enter::exec`].
 pub const ENTER_SUBCOMMAND: &str = "sandbox-enter";
+
+/// The subcommand of the helper that runs [`supervisor::serve`] in a warm sandbox.
+pub const SERVE_SUBCOMMAND: &str = "sandbox-serve";
 
 /// Reads a sandbox step's arguments, `--name value ... -- command...`: hands each
 /// option to `each` in order (its value `None` when the arguments end after its name),
@@ -97,6 +102,10 @@ pub struct FullSandbox {
     pub detect: bool,
     /// Paths no runtime may hold (data folder, database).
     pub hide: Vec<PathBuf>,
+    /// Whether matches may reuse warm sandboxes ([`warm`]): a runner of many matches.
+    pub reuse: bool,
+    /// The idle warm sandboxes.
+    pub warm: warm::WarmPool,
     /// The runtimes found so far by program and bot folder (with `detect`).
     detected: DetectedRuntimes,
 }
@@ -114,6 +123,9 @@ pub struct Setup {
     pub runtimes: Vec<PathBuf>,
     /// Find each bot's runtime from its program (`run`, `tournament`).
     pub detect: bool,
+    /// Keep warm sandboxes for the next matches ([`warm`]): servers, workers and
+    /// tournaments, which play many.
+    pub reuse: bool,
 }
 
 impl FullSandbox {
@@ -128,10 +140,21 @@ impl FullSandbox {
         jail: &jail::JailArgs,
         cgroup: Option<&cgroup::MatchCgroup>,
     ) -> std::process::Command {
-        let tail = bwrap_args
-            .into_iter()
-            .chain(std::iter::once(JAIL_SUBCOMMAND.into()))
-            .chain(jail.to_args());
+        let step = std::iter::once(JAIL_SUBCOMMAND.into())
+            .chain(jail.to_args())
+            .collect();
+        self.command_step(bwrap_args, step, cgroup)
+    }
+
+    /// [`FullSandbox::command`] for any step of the helper: `step` is its subcommand
+    /// and arguments.
+    pub fn command_step(
+        &self,
+        bwrap_args: Vec<std::ffi::OsString>,
+        step: Vec<std::ffi::OsString>,
+        cgroup: Option<&cgroup::MatchCgroup>,
+    ) -> std::process::Command {
+        let tail = bwrap_args.into_iter().chain(step);
         let mut cmd = match cgroup {
             None => {
                 let mut cmd = std::process::Command::new(&self.bwrap);
@@ -262,6 +285,8 @@ impl Sandbox {
             runtimes: view::listed_runtimes(&setup.runtimes, &setup.hide).map_err(Unavailable)?,
             detect: setup.detect,
             hide: setup.hide.clone(),
+            reuse: setup.reuse,
+            warm: warm::WarmPool::default(),
             detected: DetectedRuntimes::default(),
         };
         Ok(Sandbox::Full(Arc::new(full)))

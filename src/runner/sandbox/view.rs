@@ -378,6 +378,35 @@ pub fn describe(runtimes: &[Runtime]) -> Vec<(String, String)> {
     out
 }
 
+/// The names of the entries of `dir`, when a match's view can show it as one mount with
+/// a link per entry (see [`bwrap_args`]): the match's uid (`own_uid`) may pass through
+/// it, and no entry is itself a link. `None` otherwise.
+///
+/// # Errors
+/// The folder cannot be read.
+pub fn linkable_entries(dir: &Path, own_uid: bool) -> std::io::Result<Option<Vec<OsString>>> {
+    use std::os::unix::fs::PermissionsExt;
+    if own_uid && std::fs::metadata(dir)?.permissions().mode() & 0o001 == 0 {
+        return Ok(None);
+    }
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        if entry.file_type()?.is_symlink() {
+            return Ok(None);
+        }
+        names.push(entry.file_name());
+    }
+    names.sort();
+    Ok(Some(names))
+}
+
+/// Whether a runtime's mount point lies in the scratch area (a runtime under `/tmp`),
+/// which a warm sandbox makes anew for every match.
+pub fn in_scratch(runtime: &Runtime) -> bool {
+    mount_point(&runtime.prefix).starts_with(SCRATCH)
+}
+
 /// What a sandbox is for, which decides its working directory and its identity.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Work {
@@ -391,6 +420,11 @@ pub enum Work {
         /// The build runs as a uid of its own.
         own_uid: bool,
     },
+    /// A warm sandbox ([`super::warm`], root only): a match's view without a bot
+    /// folder or scratch area of its own, kept for many matches; each match gets its
+    /// own from the supervisor ([`super::supervisor`]). It does not die with the thread
+    /// that started it: it ends when the runner closes its socket.
+    Warm,
 }
 
 /// The bubblewrap arguments for one bot, up to and including the helper's path: the
@@ -413,7 +447,11 @@ pub fn bwrap_args(
     runtimes: &[Runtime],
 ) -> std::io::Result<Vec<OsString>> {
     let writable = matches!(work_kind, Work::Build { .. });
-    let own_uid = full.as_root && matches!(work_kind, Work::Match | Work::Build { own_uid: true });
+    let own_uid = full.as_root
+        && matches!(
+            work_kind,
+            Work::Match | Work::Warm | Work::Build { own_uid: true }
+        );
     let mut a: Vec<OsString> = Vec::new();
     let mut push = |items: &[&dyn AsRef<std::ffi::OsStr>]| {
         a.extend(items.iter().map(|i| i.as_ref().to_os_string()));
@@ -441,12 +479,10 @@ pub fn bwrap_args(
             push(&[&"--cap-drop", &"ALL"]);
         }
     }
-    push(&[
-        &"--die-with-parent",
-        &"--new-session",
-        &"--hostname",
-        &"mazearena",
-    ]);
+    if work_kind != Work::Warm {
+        push(&[&"--die-with-parent"]);
+    }
+    push(&[&"--new-session", &"--hostname", &"mazearena"]);
     push(&[&"--ro-bind", &"/usr", &"/usr"]);
     for dir in SYSTEM_DIRS {
         let p = Path::new(dir);
@@ -491,6 +527,9 @@ pub fn bwrap_args(
                 push(&[&"--ro-bind", &"/dev/null", &at.join(secret)]);
             }
         }
+    }
+    if work_kind == Work::Warm {
+        push(&[&"--dir", &BOT_FILES]);
     }
     if let (Some(dir), true) = (bot_dir, writable) {
         push(&[&"--bind", &dir, &work]);
@@ -644,6 +683,8 @@ mod tests {
             runtimes: Vec::new(),
             detect: false,
             hide: Vec::new(),
+            reuse: false,
+            warm: Default::default(),
             detected: Default::default(),
         };
         bwrap_args(&full, Some(dir), 1 << 20, Work::Match, &[])

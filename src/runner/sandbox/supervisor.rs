@@ -1,0 +1,502 @@
+//! The inside of a warm sandbox ([`super::warm`]): `mazearena sandbox-serve`, run by
+//! bubblewrap once the namespaces and the filesystem view are in place, stays for many
+//! matches of one worker slot. Its standard input is a `SOCK_SEQPACKET` socket to the
+//! runner; nothing else reaches it.
+//!
+//! For each match the runner sends a [`Request`] with four descriptors: the bot's stdin,
+//! stdout and stderr, and its folder as a detached read-only mount (`open_tree`). The
+//! supervisor clones a fresh **match init** into new PID, mount and IPC namespaces,
+//! which mounts a fresh `/proc` (this match's processes only), a fresh scratch tmpfs
+//! (`/sandbox`: `tmp/` and `work/`, with a link per entry of the bot's folder), attaches
+//! the bot's folder at [`super::view::BOT_FILES`], and forks the bot's process, which
+//! goes through the same jail step as in a one-shot sandbox ([`super::jail::exec`]: uid,
+//! limits, `no_new_privs`, Landlock, seccomp) before its `exec`. When the bot's process
+//! ends, the init ends, and the kernel kills whatever is left in its PID namespace; the
+//! mount and IPC namespaces, with the scratch area and every IPC object, go with the
+//! last process. Nothing of a match is left for the next one: not a process, a file, an
+//! IPC object or a PID number.
+
+use std::ffi::OsString;
+use std::io::IoSlice;
+use std::os::fd::{AsFd, AsRawFd, BorrowedFd, FromRawFd, OwnedFd, RawFd};
+use std::path::Path;
+
+use nix::sys::socket::{ControlMessage, ControlMessageOwned, MsgFlags, recvmsg, sendmsg};
+
+use super::jail::{self, SCRATCH};
+use super::view::BOT_FILES;
+
+/// The largest message either side sends (a bot's command line and variables).
+pub const MAX_MESSAGE: usize = 256 * 1024;
+
+/// The descriptors a [`Request`] carries, in order.
+pub const REQUEST_FDS: usize = 4;
+
+/// One match, as the runner asks for it.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Request {
+    /// The size of the match's scratch tmpfs, in bytes.
+    pub scratch_bytes: u64,
+    /// The names of the bot folder's top-level entries: each gets a link in the working
+    /// directory to its place in the folder.
+    pub entries: Vec<Vec<u8>>,
+    /// The jail step's arguments ([`jail::JailArgs::to_args`]).
+    pub jail: Vec<String>,
+}
+
+/// What the supervisor answers.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Reply {
+    /// Up and waiting for matches (sent once, first).
+    Ready,
+    /// The match's init is started; the message carries its pidfd.
+    Started,
+    /// The match could not be started, and why.
+    Refused(String),
+    /// The match's init ended with this code (the bot's exit code, or 128 + the signal
+    /// that ended it, as bubblewrap reports it).
+    Ended(i32),
+}
+
+/// Sends one message with `fds` attached.
+///
+/// # Errors
+/// The socket's.
+pub fn send(socket: BorrowedFd<'_>, message: &[u8], fds: &[RawFd]) -> std::io::Result<()> {
+    let iov = [IoSlice::new(message)];
+    let rights = [ControlMessage::ScmRights(fds)];
+    let cmsgs: &[ControlMessage] = if fds.is_empty() { &[] } else { &rights };
+    sendmsg::<()>(
+        socket.as_raw_fd(),
+        &iov,
+        cmsgs,
+        MsgFlags::MSG_NOSIGNAL,
+        None,
+    )
+    .map(drop)
+    .map_err(std::io::Error::from)
+}
+
+/// Receives one message into `buf` with the descriptors attached to it (close-on-exec).
+/// `None` when the other side has closed the socket.
+///
+/// # Errors
+/// The socket's; a message that did not fit `buf` (`InvalidData`).
+pub fn recv(
+    socket: BorrowedFd<'_>,
+    buf: &mut [u8],
+) -> std::io::Result<Option<(usize, Vec<OwnedFd>)>> {
+    let mut space = nix::cmsg_space!([RawFd; REQUEST_FDS]);
+    let mut iov = [std::io::IoSliceMut::new(buf)];
+    let msg = recvmsg::<()>(
+        socket.as_raw_fd(),
+        &mut iov,
+        Some(&mut space),
+        MsgFlags::MSG_CMSG_CLOEXEC,
+    )
+    .map_err(std::io::Error::from)?;
+    let mut fds = Vec::new();
+    for cmsg in msg.cmsgs().map_err(std::io::Error::from)? {
+        if let ControlMessageOwned::ScmRights(received) = cmsg {
+            // SAFETY: the kernel just installed these descriptors in this process.
+            fds.extend(
+                received
+                    .into_iter()
+                    .map(|fd| unsafe { OwnedFd::from_raw_fd(fd) }),
+            );
+        }
+    }
+    let truncated = msg
+        .flags
+        .intersects(MsgFlags::MSG_TRUNC | MsgFlags::MSG_CTRUNC);
+    let n = msg.bytes;
+    if truncated {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "a message too long for the other side",
+        ));
+    }
+    if n == 0 && fds.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some((n, fds)))
+}
+
+fn reply(socket: BorrowedFd<'_>, reply: &Reply, fds: &[RawFd]) -> std::io::Result<()> {
+    let bytes = serde_json::to_vec(reply).map_err(std::io::Error::other)?;
+    send(socket, &bytes, fds)
+}
+
+/// Serves matches on standard input until the runner closes it. Returns only on a
+/// failure, with the reason (when the runner has gone: `Ok`).
+///
+/// # Errors
+/// The reason it stopped.
+pub fn serve() -> Result<(), String> {
+    // SAFETY: descriptor 0 is the control socket for this process's whole life.
+    let control = unsafe { BorrowedFd::borrow_raw(0) };
+    if std::fs::read_dir("/proc/self/task").map_or(0, Iterator::count) != 1 {
+        return Err("the supervisor must have one thread (it clones)".into());
+    }
+    reply(control, &Reply::Ready, &[]).map_err(|e| format!("cannot answer: {e}"))?;
+    let mut buf = vec![0u8; MAX_MESSAGE];
+    loop {
+        let (n, fds) = match recv(control, &mut buf) {
+            Ok(Some(m)) => m,
+            Ok(None) => return Ok(()),
+            Err(e) => return Err(format!("cannot read the runner's request: {e}")),
+        };
+        let request = serde_json::from_slice::<Request>(&buf[..n])
+            .map_err(|e| format!("a bad request: {e}"))
+            .and_then(|r| {
+                let args: Vec<OsString> = r.jail.iter().map(OsString::from).collect();
+                let jail = jail::JailArgs::parse(&args)?;
+                check_entries(&r.entries)?;
+                let fds: [OwnedFd; REQUEST_FDS] = fds
+                    .try_into()
+                    .map_err(|_| format!("a request needs {REQUEST_FDS} descriptors"))?;
+                Ok((r, jail, fds))
+            });
+        let (request, jail, fds) = match request {
+            Ok(r) => r,
+            Err(e) => {
+                reply(control, &Reply::Refused(e), &[]).map_err(|e| e.to_string())?;
+                continue;
+            }
+        };
+        match start(&request, &jail, fds) {
+            Err(e) => reply(control, &Reply::Refused(e), &[]).map_err(|e| e.to_string())?,
+            Ok((pidfd, pid)) => {
+                reply(control, &Reply::Started, &[pidfd.as_raw_fd()]).map_err(|e| e.to_string())?;
+                let code = wait_match(control, &pidfd, pid)?;
+                reply(control, &Reply::Ended(code), &[]).map_err(|e| e.to_string())?;
+            }
+        }
+    }
+}
+
+/// Each entry is one plain name: not empty, no `/`, not `.` or `..`.
+fn check_entries(entries: &[Vec<u8>]) -> Result<(), String> {
+    for e in entries {
+        if e.is_empty() || e.contains(&b'/') || e == b"." || e == b".." || e.contains(&0) {
+            return Err(format!("a bad entry name {:?}", String::from_utf8_lossy(e)));
+        }
+    }
+    Ok(())
+}
+
+/// Waits for the match's init to end; when the runner closes the socket meanwhile (it
+/// has gone), kills the match and stops.
+fn wait_match(control: BorrowedFd<'_>, pidfd: &OwnedFd, pid: libc::pid_t) -> Result<i32, String> {
+    use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+    loop {
+        let mut fds = [
+            PollFd::new(pidfd.as_fd(), PollFlags::POLLIN),
+            PollFd::new(control, PollFlags::POLLIN),
+        ];
+        match poll(&mut fds, PollTimeout::NONE) {
+            Err(nix::errno::Errno::EINTR) => continue,
+            Err(e) => return Err(format!("poll: {e}")),
+            Ok(_) => {}
+        }
+        let ended = fds[0].any().unwrap_or(false);
+        let runner = fds[1].revents().unwrap_or(PollFlags::empty());
+        if ended {
+            let mut status = 0;
+            // SAFETY: waits for our own child.
+            let got = unsafe { libc::waitpid(pid, &mut status, 0) };
+            if got != pid {
+                return Err(format!("waitpid: {}", std::io::Error::last_os_error()));
+            }
+            return Ok(exit_code(status));
+        }
+        if runner.intersects(PollFlags::POLLHUP | PollFlags::POLLERR | PollFlags::POLLIN) {
+            // Nothing is asked during a match: the runner has gone.
+            kill_pidfd(pidfd);
+            return Err("the runner has gone".into());
+        }
+    }
+}
+
+/// Sends SIGKILL through a pidfd: to a match's init, which takes its PID namespace with
+/// it. A process that has ended already is not an error.
+pub fn kill_pidfd(pidfd: &OwnedFd) {
+    // SAFETY: pidfd_send_signal(2) with no siginfo.
+    unsafe {
+        libc::syscall(
+            libc::SYS_pidfd_send_signal,
+            pidfd.as_raw_fd(),
+            libc::SIGKILL,
+            std::ptr::null::<libc::siginfo_t>(),
+            0u32,
+        )
+    };
+}
+
+/// The code a process's wait status stands for: its exit code, or 128 + its signal.
+fn exit_code(status: libc::c_int) -> i32 {
+    if libc::WIFEXITED(status) {
+        libc::WEXITSTATUS(status)
+    } else if libc::WIFSIGNALED(status) {
+        128 + libc::WTERMSIG(status)
+    } else {
+        jail::SETUP_FAILED
+    }
+}
+
+/// Clones the match's init into new PID, mount and IPC namespaces: its pidfd and pid.
+fn start(
+    request: &Request,
+    jail: &jail::JailArgs,
+    fds: [OwnedFd; REQUEST_FDS],
+) -> Result<(OwnedFd, libc::pid_t), String> {
+    let mut pidfd: libc::c_int = -1;
+    let flags = libc::CLONE_NEWPID
+        | libc::CLONE_NEWNS
+        | libc::CLONE_NEWIPC
+        | libc::CLONE_PIDFD
+        | libc::SIGCHLD;
+    // SAFETY: a clone without a new stack, like fork(2): this process has one thread
+    // (checked at start), so the child's copy of its memory is consistent.
+    let pid = unsafe {
+        libc::syscall(
+            libc::SYS_clone,
+            flags as libc::c_ulong,
+            0usize,
+            &mut pidfd as *mut libc::c_int,
+            0usize,
+            0usize,
+        )
+    };
+    match pid {
+        -1 => Err(format!(
+            "cannot make the match's namespaces: {}",
+            std::io::Error::last_os_error()
+        )),
+        0 => {
+            let code = match_init(request, jail, fds);
+            // SAFETY: ends the child without running anything of the parent's.
+            unsafe { libc::_exit(code) }
+        }
+        pid => {
+            drop(fds);
+            // SAFETY: CLONE_PIDFD stored a new descriptor that this process owns.
+            Ok((unsafe { OwnedFd::from_raw_fd(pidfd) }, pid as libc::pid_t))
+        }
+    }
+}
+
+/// The match's init (PID 1 of the match's namespace): prepares the match's world,
+/// starts the bot's process and ends with it. Returns its exit code.
+fn match_init(request: &Request, jail: &jail::JailArgs, fds: [OwnedFd; REQUEST_FDS]) -> i32 {
+    let [stdin, stdout, stderr, tree] = fds;
+    // The runner's socket is not the match's.
+    // SAFETY: closes descriptor 0 (the control socket) in this process only.
+    unsafe { libc::close(0) };
+    // SAFETY: prctl(2) with a signal number.
+    unsafe { libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) };
+    if let Err(e) = prepare(request, &tree) {
+        say(&stderr, &format!("mazearena sandbox: {e}\n"));
+        return jail::SETUP_FAILED;
+    }
+    drop(tree);
+    // SAFETY: fork(2) in a process of one thread.
+    let bot = unsafe { libc::fork() };
+    if bot == 0 {
+        let reason = bot_process(jail, &stdin, &stdout, &stderr);
+        // Descriptor 2 is the bot's stderr by now (or still the supervisor's).
+        eprintln!("mazearena sandbox: {reason}");
+        // SAFETY: ends the child.
+        unsafe { libc::_exit(jail::SETUP_FAILED) };
+    }
+    drop((stdin, stdout, stderr));
+    if bot < 0 {
+        return jail::SETUP_FAILED;
+    }
+    loop {
+        let mut status = 0;
+        // SAFETY: reaps any child (orphans of the match are adopted here).
+        let got = unsafe { libc::waitpid(-1, &mut status, 0) };
+        if got == bot {
+            return exit_code(status);
+        }
+        if got < 0 && std::io::Error::last_os_error().raw_os_error() != Some(libc::EINTR) {
+            return jail::SETUP_FAILED;
+        }
+    }
+}
+
+/// Writes `text` to a descriptor, ignoring failures (a message on the bot's stderr).
+fn say(fd: &OwnedFd, text: &str) {
+    // SAFETY: write(2) of a live buffer.
+    unsafe { libc::write(fd.as_raw_fd(), text.as_ptr().cast(), text.len()) };
+}
+
+/// The bot's process: its stdio, a session of its own, the working directory, then the
+/// jail step. Returns only on failure, with the reason.
+fn bot_process(
+    jail: &jail::JailArgs,
+    stdin: &OwnedFd,
+    stdout: &OwnedFd,
+    stderr: &OwnedFd,
+) -> String {
+    for (fd, to) in [(stdin, 0), (stdout, 1), (stderr, 2)] {
+        // SAFETY: dup2(2) onto the standard descriptors of this process.
+        if unsafe { libc::dup2(fd.as_raw_fd(), to) } < 0 {
+            return format!("dup2: {}", std::io::Error::last_os_error());
+        }
+    }
+    // SAFETY: closes every other descriptor of this process (the standard ones stay).
+    if unsafe { libc::syscall(libc::SYS_close_range, 3u32, u32::MAX, 0u32) } != 0 {
+        return format!("close_range: {}", std::io::Error::last_os_error());
+    }
+    if nix::unistd::setsid().is_err() {
+        return "setsid failed".into();
+    }
+    if let Err(e) = std::env::set_current_dir(Path::new(SCRATCH).join("work")) {
+        return format!("cannot enter the working directory: {e}");
+    }
+    jail::exec(jail)
+}
+
+/// The match's own world, made in its fresh mount namespace: `/proc` of its PID
+/// namespace (with the parts the one-shot view has read-only kept read-only), the
+/// scratch tmpfs with `tmp/` (1777) and `work/` (0777) and a link per entry, and the
+/// bot's folder attached read-only.
+fn prepare(request: &Request, tree: &OwnedFd) -> Result<(), String> {
+    use nix::mount::{MsFlags, mount};
+    let none = None::<&str>;
+    let at = |what: &str, e: nix::Error| format!("{what}: {e}");
+    mount(none, "/", none, MsFlags::MS_REC | MsFlags::MS_PRIVATE, none)
+        .map_err(|e| at("making the mounts private", e))?;
+    mount(
+        Some("proc"),
+        "/proc",
+        Some("proc"),
+        MsFlags::MS_NOSUID | MsFlags::MS_NODEV | MsFlags::MS_NOEXEC,
+        none,
+    )
+    .map_err(|e| at("mounting /proc", e))?;
+    for p in ["/proc/sys", "/proc/sysrq-trigger", "/proc/irq", "/proc/bus"] {
+        if Path::new(p).exists() {
+            read_only_bind(p).map_err(|e| at(p, e))?;
+        }
+    }
+    let options = format!("size={},mode=0755", request.scratch_bytes);
+    mount(
+        Some("tmpfs"),
+        SCRATCH,
+        Some("tmpfs"),
+        MsFlags::MS_NOSUID | MsFlags::MS_NODEV,
+        Some(options.as_str()),
+    )
+    .map_err(|e| at("mounting the scratch area", e))?;
+    let scratch = Path::new(SCRATCH);
+    for (dir, mode) in [("tmp", 0o1777), ("work", 0o777)] {
+        let path = scratch.join(dir);
+        std::fs::create_dir(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    use std::os::unix::ffi::OsStrExt;
+    for name in &request.entries {
+        let name = std::ffi::OsStr::from_bytes(name);
+        std::os::unix::fs::symlink(
+            Path::new(BOT_FILES).join(name),
+            scratch.join("work").join(name),
+        )
+        .map_err(|e| format!("a link to the bot's file {name:?}: {e}"))?;
+    }
+    attach(tree, BOT_FILES).map_err(|e| format!("attaching the bot's folder: {e}"))?;
+    Ok(())
+}
+
+/// Binds `path` onto itself read-only.
+fn read_only_bind(path: &str) -> Result<(), nix::Error> {
+    use nix::mount::{MsFlags, mount};
+    let none = None::<&str>;
+    mount(
+        Some(path),
+        path,
+        none,
+        MsFlags::MS_BIND | MsFlags::MS_REC,
+        none,
+    )?;
+    mount(
+        none,
+        path,
+        none,
+        MsFlags::MS_BIND
+            | MsFlags::MS_REMOUNT
+            | MsFlags::MS_RDONLY
+            | MsFlags::MS_NOSUID
+            | MsFlags::MS_NODEV
+            | MsFlags::MS_NOEXEC,
+        none,
+    )
+}
+
+/// `move_mount(2)` flag: the source is the descriptor itself.
+const MOVE_MOUNT_F_EMPTY_PATH: libc::c_uint = 0x4;
+
+/// Attaches the detached mount `tree` at `at`.
+fn attach(tree: &OwnedFd, at: &str) -> std::io::Result<()> {
+    let at = std::ffi::CString::new(at)?;
+    // SAFETY: move_mount(2) with a live descriptor and NUL-terminated paths.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_move_mount,
+            tree.as_raw_fd(),
+            c"".as_ptr(),
+            libc::AT_FDCWD,
+            at.as_ptr(),
+            MOVE_MOUNT_F_EMPTY_PATH,
+        )
+    };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn entry_names_are_plain_names() {
+        assert!(check_entries(&[b"bot.py".to_vec(), b".hidden".to_vec()]).is_ok());
+        for bad in [&b""[..], b".", b"..", b"a/b", b"/etc", b"a\0b"] {
+            assert!(check_entries(&[bad.to_vec()]).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn messages_and_descriptors_cross_a_seqpacket_socket() {
+        use nix::sys::socket::{AddressFamily, SockFlag, SockType, socketpair};
+        let (a, b) = socketpair(
+            AddressFamily::Unix,
+            SockType::SeqPacket,
+            None,
+            SockFlag::SOCK_CLOEXEC,
+        )
+        .unwrap();
+        let file = tempfile::tempfile().unwrap();
+        send(a.as_fd(), b"hello", &[file.as_raw_fd()]).unwrap();
+        send(a.as_fd(), b"again", &[]).unwrap();
+        let mut buf = [0u8; 16];
+        let (n, fds) = recv(b.as_fd(), &mut buf).unwrap().unwrap();
+        assert_eq!((&buf[..n], fds.len()), (&b"hello"[..], 1));
+        let (n, fds) = recv(b.as_fd(), &mut buf).unwrap().unwrap();
+        assert_eq!((&buf[..n], fds.len()), (&b"again"[..], 0));
+        send(a.as_fd(), &[7u8; 32], &[]).unwrap();
+        assert!(
+            recv(b.as_fd(), &mut buf).is_err(),
+            "a message too long is an error"
+        );
+        drop(a);
+        assert!(recv(b.as_fd(), &mut buf).unwrap().is_none());
+    }
+}

@@ -1,0 +1,463 @@
+//! Warm sandboxes: a sandbox kept for many matches of a worker slot, so that a match does
+//! not pay for bubblewrap, the view's mounts, a network namespace and a cgroup of its own
+//! (BENCHMARKS.md, "The sandbox's cost per match").
+//!
+//! A warm sandbox is bubblewrap with a match's view, minus the bot's folder and scratch
+//! area, running the supervisor ([`super::supervisor`]) in a cgroup of its own. Each
+//! match gets, from the supervisor, fresh PID, mount and IPC namespaces with a fresh
+//! `/proc` and scratch tmpfs, the bot's folder attached read-only, and the same jail step
+//! as a one-shot sandbox. Between matches the runner checks that nothing of the last one
+//! is left: its init has ended and been reaped, and the cgroup holds only the sandbox's
+//! own processes; the cgroup's counters are read as differences from the match's start
+//! ([`MatchCgroup::mark`]). A sandbox that fails a check is thrown away, never reused.
+//!
+//! Used where it is proven: a server running as root with cgroups (the limits of a match
+//! must hold for every process together), a bot folder shown as one mount with links, no
+//! runtime under `/tmp`, and a runner that plays many matches (servers, workers,
+//! tournaments). Everything else gets a one-shot sandbox per match.
+
+use std::os::fd::{AsFd, AsRawFd, OwnedFd, RawFd};
+use std::path::Path;
+use std::process::Stdio;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use super::cgroup::{CgroupLimits, MatchCgroup};
+use super::supervisor::{self, Reply, Request};
+use super::view::{self, Runtime, Work};
+use super::{FullSandbox, SERVE_SUBCOMMAND};
+
+/// Idle warm sandboxes kept at most; the oldest goes first.
+pub const IDLE_MAX: usize = 8;
+
+/// A warm sandbox's own processes, counted by its cgroup's process limit on top of the
+/// bot's: bubblewrap's two, the supervisor and the match's init.
+pub const WARM_PROCESSES: u64 = 4;
+
+/// The view's placeholder scratch area, covered by each match's own.
+const PLACEHOLDER_SCRATCH: u64 = 64 * 1024;
+
+/// How long the supervisor may take to start, or to answer.
+const ANSWER_WAIT: Duration = Duration::from_secs(10);
+
+/// How long the processes of a match that was killed may take to leave its cgroup.
+const LEAVE_WAIT: Duration = Duration::from_secs(2);
+
+/// What makes warm sandboxes interchangeable: the match's core and the runtimes in the
+/// view, in order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WarmKey {
+    /// The core the cgroup holds the match to.
+    pub core: Option<usize>,
+    /// The runtimes mounted in the view.
+    pub runtimes: Vec<Runtime>,
+}
+
+/// The idle warm sandboxes of a runner.
+#[derive(Debug, Default)]
+pub struct WarmPool {
+    idle: Mutex<Vec<(WarmKey, WarmSandbox)>>,
+}
+
+impl WarmPool {
+    /// An idle sandbox for `key` that passes its checks, if there is one.
+    fn take(&self, key: &WarmKey) -> Option<WarmSandbox> {
+        loop {
+            let found = {
+                let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
+                let at = idle.iter().rposition(|(k, _)| k == key)?;
+                idle.remove(at).1
+            };
+            let mut sandbox = found;
+            if sandbox.ready() {
+                return Some(sandbox);
+            }
+            // Dropped: killed and removed.
+        }
+    }
+
+    /// Keeps `sandbox` for the next match of `key`.
+    fn put(&self, key: WarmKey, sandbox: WarmSandbox) {
+        let evicted = {
+            let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
+            idle.push((key, sandbox));
+            (idle.len() > IDLE_MAX).then(|| idle.remove(0))
+        };
+        drop(evicted);
+    }
+
+    /// How many sandboxes are idle.
+    pub fn idle(&self) -> usize {
+        self.idle.lock().map_or(0, |i| i.len())
+    }
+}
+
+/// One warm sandbox: bubblewrap running the supervisor, its socket and its cgroup.
+/// Dropping it kills every process in it and removes its cgroup.
+#[derive(Debug)]
+pub struct WarmSandbox {
+    child: std::process::Child,
+    /// The runner's end of the supervisor's socket (non-blocking).
+    control: OwnedFd,
+    cgroup: MatchCgroup,
+    /// Threads in the cgroup with no match: the sandbox's own.
+    own_threads: usize,
+    /// The last match's end was not read yet.
+    awaiting_end: bool,
+}
+
+impl WarmSandbox {
+    /// Starts one, in a cgroup with the given limits.
+    fn start(
+        full: &FullSandbox,
+        key: &WarmKey,
+        memory: Option<u64>,
+        pids: Option<u64>,
+    ) -> Result<WarmSandbox, String> {
+        use nix::sys::socket::{AddressFamily, SockFlag, SockType, socketpair};
+        let root = full.cgroups.as_ref().map_err(Clone::clone)?;
+        let cgroup = root
+            .create(CgroupLimits {
+                memory_bytes: memory,
+                pids,
+                core: key.core,
+            })
+            .map_err(|e| e.to_string())?;
+        let (ours, theirs) = socketpair(
+            AddressFamily::Unix,
+            SockType::SeqPacket,
+            None,
+            SockFlag::SOCK_CLOEXEC | SockFlag::SOCK_NONBLOCK,
+        )
+        .map_err(|e| format!("socketpair: {e}"))?;
+        // The supervisor's end blocks; ours does not.
+        set_blocking(&theirs).map_err(|e| format!("fcntl: {e}"))?;
+        let args = view::bwrap_args(full, None, PLACEHOLDER_SCRATCH, Work::Warm, &key.runtimes)
+            .map_err(|e| e.to_string())?;
+        let mut cmd = full.command_step(args, vec![SERVE_SUBCOMMAND.into()], Some(&cgroup));
+        use std::os::unix::process::CommandExt;
+        cmd.stdin(Stdio::from(theirs))
+            .stdout(Stdio::null())
+            .stderr(Stdio::inherit())
+            .process_group(0);
+        let child = cmd
+            .spawn()
+            .map_err(|e| format!("cannot run {}: {e}", full.bwrap.display()))?;
+        let mut sandbox = WarmSandbox {
+            child,
+            control: ours,
+            cgroup,
+            own_threads: 0,
+            awaiting_end: false,
+        };
+        match sandbox.answer() {
+            Ok((Reply::Ready, _)) => {}
+            Ok((other, _)) => return Err(format!("the supervisor said {other:?}")),
+            Err(e) => {
+                let status = sandbox.child.try_wait().ok().flatten();
+                return Err(format!("the warm sandbox did not start ({status:?}): {e}"));
+            }
+        }
+        sandbox.own_threads = sandbox.cgroup.threads().len();
+        Ok(sandbox)
+    }
+
+    /// The supervisor's next answer, waited for up to [`ANSWER_WAIT`].
+    fn answer(&self) -> Result<(Reply, Vec<OwnedFd>), String> {
+        use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+        let until = Instant::now() + ANSWER_WAIT;
+        loop {
+            match try_answer(&self.control) {
+                Ok(Some(answer)) => return Ok(answer),
+                Ok(None) => {}
+                Err(e) => return Err(e),
+            }
+            let left = until.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err("no answer from the supervisor".into());
+            }
+            let mut fds = [PollFd::new(self.control.as_fd(), PollFlags::POLLIN)];
+            let ms = u16::try_from(left.as_millis()).unwrap_or(u16::MAX);
+            let _ = poll(&mut fds, PollTimeout::from(ms));
+        }
+    }
+
+    /// Whether the sandbox may take the next match: the last one's end is read, the
+    /// sandbox is alive, and no process of the last match is left in its cgroup.
+    fn ready(&mut self) -> bool {
+        if self.awaiting_end {
+            match self.answer() {
+                Ok((Reply::Ended(_), _)) => self.awaiting_end = false,
+                _ => return false,
+            }
+        }
+        if !matches!(self.child.try_wait(), Ok(None)) {
+            return false;
+        }
+        let until = Instant::now() + LEAVE_WAIT;
+        while self.cgroup.threads().len() > self.own_threads {
+            if Instant::now() > until {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        true
+    }
+}
+
+impl Drop for WarmSandbox {
+    fn drop(&mut self) {
+        self.cgroup.kill_all();
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The supervisor's answer if one is there: `Ok(None)` when none is yet.
+fn try_answer(control: &OwnedFd) -> Result<Option<(Reply, Vec<OwnedFd>)>, String> {
+    let mut buf = [0u8; 4096];
+    match supervisor::recv(control.as_fd(), &mut buf) {
+        Ok(Some((n, fds))) => serde_json::from_slice(&buf[..n])
+            .map(|r| Some((r, fds)))
+            .map_err(|e| format!("a bad answer from the supervisor: {e}")),
+        Ok(None) => Err("the supervisor has ended".into()),
+        Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => Ok(None),
+        Err(e) => Err(format!("the supervisor's socket: {e}")),
+    }
+}
+
+fn set_blocking(fd: &OwnedFd) -> nix::Result<()> {
+    use nix::fcntl::{FcntlArg, OFlag, fcntl};
+    let flags = OFlag::from_bits_truncate(fcntl(fd, FcntlArg::F_GETFL)?);
+    fcntl(fd, FcntlArg::F_SETFL(flags - OFlag::O_NONBLOCK)).map(drop)
+}
+
+/// The bot's side of a match's pipes, as the supervisor gets them: stdin's read end,
+/// stdout's and stderr's write ends.
+pub struct MatchStdio {
+    /// The bot's stdin (read end).
+    pub stdin: OwnedFd,
+    /// The bot's stdout (write end).
+    pub stdout: OwnedFd,
+    /// The bot's stderr (write end).
+    pub stderr: OwnedFd,
+}
+
+/// A match running in a warm sandbox. Dropping it kills the match and gives the sandbox
+/// back to the pool, which checks it before its next match.
+#[derive(Debug)]
+pub struct WarmMatch {
+    full: Arc<FullSandbox>,
+    key: WarmKey,
+    sandbox: Option<WarmSandbox>,
+    pidfd: OwnedFd,
+    /// The match's init, as this runner sees it.
+    pub init_pid: u32,
+    ended: Option<i32>,
+}
+
+/// Starts a match in a warm sandbox of `full` for `key` (an idle one, or a new one):
+/// the cgroup gets the match's limits and counts from here.
+///
+/// # Errors
+/// The sandbox could not be started or refused the match, and why.
+pub fn start_match(
+    full: &Arc<FullSandbox>,
+    key: WarmKey,
+    memory: Option<u64>,
+    pids: Option<u64>,
+    request: &Request,
+    bot_dir: &Path,
+    stdio: MatchStdio,
+) -> Result<WarmMatch, String> {
+    let tree = detached_read_only(bot_dir)
+        .map_err(|e| format!("cannot mount the bot's folder {}: {e}", bot_dir.display()))?;
+    let message = serde_json::to_vec(request).map_err(|e| e.to_string())?;
+    if message.len() > supervisor::MAX_MESSAGE {
+        return Err("the bot's command line and variables are too long".into());
+    }
+    let fds: [RawFd; supervisor::REQUEST_FDS] = [
+        stdio.stdin.as_raw_fd(),
+        stdio.stdout.as_raw_fd(),
+        stdio.stderr.as_raw_fd(),
+        tree.as_raw_fd(),
+    ];
+    let mut sandbox = match full.warm.take(&key) {
+        Some(s) => s,
+        None => WarmSandbox::start(full, &key, memory, pids)?,
+    };
+    sandbox
+        .cgroup
+        .limit(memory, pids)
+        .map_err(|e| format!("the match's cgroup: {e}"))?;
+    sandbox.cgroup.mark();
+    supervisor::send(sandbox.control.as_fd(), &message, &fds)
+        .map_err(|e| format!("the warm sandbox's supervisor: {e}"))?;
+    drop((stdio, tree));
+    match sandbox.answer()? {
+        (Reply::Started, mut fds) if fds.len() == 1 => {
+            let pidfd = fds.remove(0);
+            let init_pid = pid_of(&pidfd).ok_or("the match's init is not found")?;
+            Ok(WarmMatch {
+                full: full.clone(),
+                key,
+                sandbox: Some(sandbox),
+                pidfd,
+                init_pid,
+                ended: None,
+            })
+        }
+        (Reply::Refused(reason), _) => {
+            full.warm.put(key, sandbox);
+            Err(reason)
+        }
+        (other, _) => Err(format!("the supervisor said {other:?}")),
+    }
+}
+
+impl WarmMatch {
+    /// The match's cgroup (the sandbox's, counting from the match's start).
+    pub fn cgroup(&self) -> Option<&MatchCgroup> {
+        self.sandbox.as_ref().map(|s| &s.cgroup)
+    }
+
+    /// Kills the match: its init, and with it its whole PID namespace.
+    pub fn kill(&self) {
+        supervisor::kill_pidfd(&self.pidfd);
+    }
+
+    /// Waits until the match's init has ended: the bot's exit status, as bubblewrap
+    /// would report it.
+    ///
+    /// # Errors
+    /// The supervisor's socket failed, or the supervisor ended.
+    pub async fn wait(&mut self) -> std::io::Result<std::process::ExitStatus> {
+        use std::os::unix::process::ExitStatusExt;
+        if self.ended.is_none() {
+            let code = self.read_end().await?;
+            self.ended = Some(code);
+        }
+        let code = self.ended.unwrap_or(super::jail::SETUP_FAILED);
+        Ok(std::process::ExitStatus::from_raw(code << 8))
+    }
+
+    /// Reads the supervisor's report of the match's end.
+    async fn read_end(&self) -> std::io::Result<i32> {
+        let sandbox = self
+            .sandbox
+            .as_ref()
+            .ok_or_else(|| std::io::Error::other("no sandbox"))?;
+        let copy = sandbox.control.try_clone()?;
+        // SAFETY: the descriptor is owned by the AsyncFd for its whole life.
+        let events = unsafe { tokio::io::unix::AsyncFd::register(copy) }?;
+        loop {
+            let mut ready = events.readable().await?;
+            match try_answer(&sandbox.control) {
+                Ok(Some((Reply::Ended(code), _))) => return Ok(code),
+                Ok(Some((other, _))) => {
+                    return Err(std::io::Error::other(format!(
+                        "the supervisor said {other:?}"
+                    )));
+                }
+                Ok(None) => ready.clear_ready(),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
+    }
+}
+
+impl Drop for WarmMatch {
+    fn drop(&mut self) {
+        self.kill();
+        if let Some(mut sandbox) = self.sandbox.take() {
+            sandbox.awaiting_end = self.ended.is_none();
+            self.full.warm.put(self.key.clone(), sandbox);
+        }
+    }
+}
+
+/// The pid of the process behind `pidfd`, in this runner's PID namespace.
+fn pid_of(pidfd: &OwnedFd) -> Option<u32> {
+    let info = std::fs::read_to_string(format!("/proc/self/fdinfo/{}", pidfd.as_raw_fd())).ok()?;
+    info.lines()
+        .find_map(|l| l.strip_prefix("Pid:"))
+        .and_then(|p| p.trim().parse::<i64>().ok())
+        .and_then(|p| u32::try_from(p).ok())
+}
+
+/// `open_tree(2)` flag: a detached copy of the mount.
+const OPEN_TREE_CLONE: libc::c_uint = 1;
+/// `mount_setattr(2)` attributes: read-only, no set-uid, no devices.
+const MOUNT_ATTR_RDONLY: u64 = 0x1;
+const MOUNT_ATTR_NOSUID: u64 = 0x2;
+const MOUNT_ATTR_NODEV: u64 = 0x4;
+
+/// `struct mount_attr` of `mount_setattr(2)`.
+#[repr(C)]
+struct MountAttr {
+    attr_set: u64,
+    attr_clr: u64,
+    propagation: u64,
+    userns_fd: u64,
+}
+
+/// A detached, read-only, no-set-uid, no-devices copy of the mount of folder `dir`,
+/// for the supervisor to attach in a match's namespace.
+fn detached_read_only(dir: &Path) -> std::io::Result<OwnedFd> {
+    use std::os::fd::FromRawFd;
+    use std::os::unix::ffi::OsStrExt;
+    let path = std::ffi::CString::new(dir.as_os_str().as_bytes())?;
+    // SAFETY: open_tree(2) with a NUL-terminated path; returns a new descriptor.
+    let fd = unsafe {
+        libc::syscall(
+            libc::SYS_open_tree,
+            libc::AT_FDCWD,
+            path.as_ptr(),
+            OPEN_TREE_CLONE | libc::O_CLOEXEC as libc::c_uint,
+        )
+    };
+    if fd < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: the descriptor was just made for this process.
+    let tree = unsafe { OwnedFd::from_raw_fd(fd as RawFd) };
+    let attr = MountAttr {
+        attr_set: MOUNT_ATTR_RDONLY | MOUNT_ATTR_NOSUID | MOUNT_ATTR_NODEV,
+        attr_clr: 0,
+        propagation: 0,
+        userns_fd: 0,
+    };
+    // SAFETY: mount_setattr(2) on our descriptor with a live `struct mount_attr`.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_mount_setattr,
+            tree.as_raw_fd(),
+            c"".as_ptr(),
+            libc::AT_EMPTY_PATH as libc::c_uint,
+            &attr as *const MountAttr,
+            std::mem::size_of::<MountAttr>(),
+        )
+    };
+    if r != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(tree)
+}
+
+/// Whether a match may use a warm sandbox of `full` (see the module's documentation),
+/// and then the names of its bot folder's entries.
+///
+/// # Errors
+/// The bot's folder cannot be read.
+pub fn plan(
+    full: &FullSandbox,
+    bot_dir: &Path,
+    runtimes: &[Runtime],
+) -> std::io::Result<Option<Vec<std::ffi::OsString>>> {
+    if !(full.reuse && full.as_root && full.cgroups.is_ok())
+        || runtimes.iter().any(view::in_scratch)
+    {
+        return Ok(None);
+    }
+    view::linkable_entries(bot_dir, true)
+}
