@@ -18,13 +18,36 @@ fn maze() -> PathBuf {
     shared_maze("classic/test_maze_01.txt")
 }
 
-/// Plays `script args` from the hostile folder through `mazearena run --json`.
-fn attack(script: &str, args: &[&str], extra: &[&str]) -> Value {
+/// Plays `script args` from the hostile folder twice, and returns both records: through
+/// `mazearena run --json` (a one-shot sandbox), and through a warm sandbox kept by this
+/// test's process for all its attacks, as a server, a worker or a tournament plays it.
+/// `extra` holds `run`'s options (only `--scratch-mb` is used by the attacks).
+fn attack(script: &str, args: &[&str], extra: &[&str]) -> [Value; 2] {
+    let one_shot = attack_one_shot(script, args, extra);
+    let warm = attack_warm(script, args, extra);
+    [one_shot, warm]
+}
+
+fn bot_command(script: &str, args: &[&str]) -> String {
     let mut bot = format!("python3 {script}");
     for a in args {
         bot.push(' ');
         bot.push_str(&shlex::try_quote(a).unwrap());
     }
+    bot
+}
+
+/// No process of `bot` is left.
+fn nothing_left(bot: &str) {
+    assert!(
+        processes_matching(bot).is_empty(),
+        "processes of {bot} outlived the match: {:?}",
+        processes_matching(bot)
+    );
+}
+
+fn attack_one_shot(script: &str, args: &[&str], extra: &[&str]) -> Value {
+    let bot = bot_command(script, args);
     let maze = maze();
     let mut cli = vec![
         "run",
@@ -45,11 +68,55 @@ fn attack(script: &str, args: &[&str], extra: &[&str]) -> Value {
     );
     let record: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(record["limits"]["sandbox"], "full");
-    assert!(
-        processes_matching(&bot).is_empty(),
-        "processes of {bot} outlived the match: {:?}",
-        processes_matching(&bot)
-    );
+    nothing_left(&bot);
+    record
+}
+
+/// The warm sandbox of this test's process (a runner of many matches, finding each
+/// bot's runtime as `run` and `tournament` do).
+fn warm_sandbox() -> &'static mazearena::runner::Sandbox {
+    static WARM: std::sync::OnceLock<mazearena::runner::Sandbox> = std::sync::OnceLock::new();
+    WARM.get_or_init(|| {
+        mazearena::runner::Sandbox::full(
+            Path::new(env!("CARGO_BIN_EXE_mazearena")),
+            &mazearena::runner::sandbox::Setup {
+                detect: true,
+                reuse: true,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    })
+}
+
+fn attack_warm(script: &str, args: &[&str], extra: &[&str]) -> Value {
+    use mazearena::runner::{BotSpec, Limits, run_match};
+    let bot = bot_command(script, args);
+    let mut limits = Limits::default();
+    if let Some(at) = extra.iter().position(|a| *a == "--scratch-mb") {
+        limits.scratch_mb = extra[at + 1].parse().unwrap();
+    }
+    let maze = crate::support::classic(1);
+    let spec = BotSpec::new(bot.clone(), root().join(HOSTILE));
+    // One core for the referee and the bot, as `run` and a server's workers have.
+    mazearena::runner::affinity::pin_to_this_core();
+    let record = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap()
+        .block_on(run_match(&spec, &maze, 0, limits, warm_sandbox(), |_| {}));
+    let record = serde_json::to_value(record.summary()).unwrap();
+    assert_eq!(record["limits"]["sandbox"], "full");
+    let mazearena::runner::Sandbox::Full(full) = warm_sandbox() else {
+        unreachable!("a full sandbox")
+    };
+    if nix::unistd::geteuid().is_root() {
+        assert!(
+            full.warm.idle() >= 1,
+            "the match was played in a warm sandbox"
+        );
+    }
+    nothing_left(&bot);
     record
 }
 
@@ -81,9 +148,10 @@ fn a_bot_cannot_read_the_database_the_data_dir_other_bots_or_the_maze() {
     let maze = maze();
     let paths = [&db, &tmp.path().join("data"), &other.join("bot.py"), &maze];
     let args: Vec<&str> = paths.iter().map(|p| p.to_str().unwrap()).collect();
-    let r = attack("read_file.py", &args, &[]);
-    contained(&r, 4);
-    assert_eq!(r["status"], "step_limit");
+    for r in attack("read_file.py", &args, &[]) {
+        contained(&r, 4);
+        assert_eq!(r["status"], "step_limit");
+    }
 }
 
 #[test]
@@ -91,18 +159,20 @@ fn a_bot_cannot_read_the_servers_environment_nor_see_its_processes() {
     let Some(_) = full_sandbox("hostile environ") else {
         return;
     };
-    let r = attack("parent_environ.py", &[], &[]);
-    contained(&r, 1);
-    let r = attack("list_processes.py", &["mazearena", "cargo"], &[]);
-    contained(&r, 1);
-    // bubblewrap's init, the bot: the namespace holds nothing else.
-    let seen = stderr(&r)
-        .split("count=")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .and_then(|n| n.parse::<u32>().ok())
-        .unwrap();
-    assert!(seen <= 3, "{}", stderr(&r));
+    for r in attack("parent_environ.py", &[], &[]) {
+        contained(&r, 1);
+    }
+    for r in attack("list_processes.py", &["mazearena", "cargo"], &[]) {
+        contained(&r, 1);
+        // The namespace's init, the bot: the namespace holds nothing else.
+        let seen = stderr(&r)
+            .split("count=")
+            .nth(1)
+            .and_then(|s| s.split_whitespace().next())
+            .and_then(|n| n.parse::<u32>().ok())
+            .unwrap();
+        assert!(seen <= 3, "{}", stderr(&r));
+    }
 }
 
 #[test]
@@ -120,8 +190,9 @@ fn a_bot_cannot_signal_the_server_or_another_bot() {
         .collect();
     let pids: Vec<String> = victims.iter().map(|c| c.id().to_string()).collect();
     let args: Vec<&str> = pids.iter().map(String::as_str).collect();
-    let r = attack("signal_pid.py", &args, &[]);
-    contained(&r, 2);
+    for r in attack("signal_pid.py", &args, &[]) {
+        contained(&r, 2);
+    }
     for v in &mut victims {
         assert!(v.try_wait().unwrap().is_none(), "a victim was killed");
         let stat = std::fs::read_to_string(format!("/proc/{}/stat", v.id())).unwrap();
@@ -137,9 +208,10 @@ fn setsid_and_a_double_fork_do_not_outlive_the_match() {
     let Some(_) = full_sandbox("hostile setsid") else {
         return;
     };
-    let r = attack("setsid_escape.py", &["4171"], &[]);
-    assert!(stderr(&r).contains("grandchild"), "{}", stderr(&r));
-    assert!(processes_matching("sleep 4171").is_empty());
+    for r in attack("setsid_escape.py", &["4171"], &[]) {
+        assert!(stderr(&r).contains("grandchild"), "{}", stderr(&r));
+        assert!(processes_matching("sleep 4171").is_empty());
+    }
 }
 
 #[test]
@@ -147,11 +219,12 @@ fn forking_300_ends_at_the_process_limit() {
     let Some(_) = full_sandbox("hostile fork") else {
         return;
     };
-    let r = attack("fork_many.py", &["300"], &[]);
-    assert_eq!(r["status"], "process_limit", "{r}");
-    assert_eq!(r["error"]["limit"]["name"], "processes");
-    assert_eq!(r["error"]["limit"]["value"], 64);
-    contained(&r, 0);
+    for r in attack("fork_many.py", &["300"], &[]) {
+        assert_eq!(r["status"], "process_limit", "{r}");
+        assert_eq!(r["error"]["limit"]["name"], "processes");
+        assert_eq!(r["error"]["limit"]["value"], 64);
+        contained(&r, 0);
+    }
 }
 
 #[test]
@@ -159,10 +232,11 @@ fn children_holding_4_5_gib_end_at_the_memory_limit() {
     let Some(_) = full_sandbox("hostile memory") else {
         return;
     };
-    let r = attack("memory_children.py", &["3", "1536"], &[]);
-    assert_eq!(r["status"], "memory_limit", "{r}");
-    assert_eq!(r["error"]["limit"]["name"], "memory");
-    assert_eq!(r["error"]["limit"]["value"], 1024);
+    for r in attack("memory_children.py", &["3", "1536"], &[]) {
+        assert_eq!(r["status"], "memory_limit", "{r}");
+        assert_eq!(r["error"]["limit"]["name"], "memory");
+        assert_eq!(r["error"]["limit"]["value"], 1024);
+    }
 }
 
 #[test]
@@ -170,24 +244,26 @@ fn spinning_children_are_counted_in_the_cpu_time_and_die_with_the_match() {
     let Some(_) = full_sandbox("hostile spin") else {
         return;
     };
-    let r = attack("spin_children.py", &["4"], &[]);
-    assert_eq!(r["status"], "step_limit", "{r}");
+    let spinning = attack("spin_children.py", &["4"], &[]);
     // The same bot without spinners, for comparison.
     let calm = attack("spin_children.py", &["0"], &[]);
-    let ms = |r: &Value, k: &str| r["timings"][k].as_u64().unwrap();
-    let (cpu, wall, calm_cpu) = (
-        ms(&r, "bot_cpu_ms"),
-        ms(&r, "wall_ms"),
-        ms(&calm, "bot_cpu_ms"),
-    );
-    // The spinners share the match's one core with the bot and the referee, and with
-    // whatever else the machine runs there (under the test suite's load, several other
-    // busy processes), so they get some part of it, and all of it is counted. Without
-    // them counted, the two CPU times would be about the same.
-    assert!(
-        cpu >= calm_cpu + (wall / 10).max(50),
-        "cpu {cpu} ms (without spinners {calm_cpu} ms) over a wall time of {wall} ms: {r}"
-    );
+    for (r, calm) in spinning.iter().zip(&calm) {
+        assert_eq!(r["status"], "step_limit", "{r}");
+        let ms = |r: &Value, k: &str| r["timings"][k].as_u64().unwrap();
+        let (cpu, wall, calm_cpu) = (
+            ms(r, "bot_cpu_ms"),
+            ms(r, "wall_ms"),
+            ms(calm, "bot_cpu_ms"),
+        );
+        // The spinners share the match's one core with the bot and the referee, and with
+        // whatever else the machine runs there (under the test suite's load, several
+        // other busy processes), so they get some part of it, and all of it is counted.
+        // Without them counted, the two CPU times would be about the same.
+        assert!(
+            cpu >= calm_cpu + (wall / 10).max(50),
+            "cpu {cpu} ms (without spinners {calm_cpu} ms) over a wall time of {wall} ms: {r}"
+        );
+    }
 }
 
 #[test]
@@ -195,18 +271,19 @@ fn a_bot_cannot_leave_the_core_of_its_match() {
     let Some(_) = full_sandbox("hostile core") else {
         return;
     };
-    let r = attack("leave_core.py", &[], &[]);
-    assert_eq!(r["status"], "step_limit", "{r}");
-    contained(&r, 2);
-    let core = r["core"]
-        .as_u64()
-        .expect("the match ran on a core of its own");
-    assert!(
-        stderr(&r).contains(&format!("BLOCKED cores={core}\n"))
-            && stderr(&r).contains(&format!("BLOCKED child cores={core}\n")),
-        "core {core}: {}",
-        stderr(&r)
-    );
+    for r in attack("leave_core.py", &[], &[]) {
+        assert_eq!(r["status"], "step_limit", "{r}");
+        contained(&r, 2);
+        let core = r["core"]
+            .as_u64()
+            .expect("the match ran on a core of its own");
+        assert!(
+            stderr(&r).contains(&format!("BLOCKED cores={core}\n"))
+                && stderr(&r).contains(&format!("BLOCKED child cores={core}\n")),
+            "core {core}: {}",
+            stderr(&r)
+        );
+    }
 }
 
 #[test]
@@ -214,9 +291,10 @@ fn filling_the_scratch_area_ends_at_the_scratch_limit_and_leaves_nothing() {
     let Some(_) = full_sandbox("hostile scratch") else {
         return;
     };
-    let r = attack("fill_scratch.py", &["200"], &["--scratch-mb", "16"]);
-    assert_eq!(r["status"], "scratch_limit", "{r}");
-    assert!(stderr(&r).contains("Errno 28"), "{}", stderr(&r));
+    for r in attack("fill_scratch.py", &["200"], &["--scratch-mb", "16"]) {
+        assert_eq!(r["status"], "scratch_limit", "{r}");
+        assert!(stderr(&r).contains("Errno 28"), "{}", stderr(&r));
+    }
     assert!(!root().join(HOSTILE).join("fill_scratch.bin").exists());
 }
 
@@ -236,8 +314,9 @@ fn a_bot_cannot_write_outside_its_scratch_area() {
         "/usr/local/mazearena-pwned",
     ];
     let before = std::fs::read(root().join(HOSTILE).join("_hostile.py")).unwrap();
-    let r = attack("write_outside.py", &args, &[]);
-    contained(&r, 5);
+    for r in attack("write_outside.py", &args, &[]) {
+        contained(&r, 5);
+    }
     let fixed = [
         Path::new("/etc/mazearena-pwned"),
         Path::new("/usr/local/mazearena-pwned"),
@@ -262,8 +341,9 @@ fn a_bot_cannot_reach_a_loopback_listener() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     listener.set_nonblocking(true).unwrap();
     let port = listener.local_addr().unwrap().port().to_string();
-    let r = attack("network.py", &[&port], &[]);
-    contained(&r, 1);
+    for r in attack("network.py", &[&port], &[]) {
+        contained(&r, 1);
+    }
     assert!(listener.accept().is_err(), "the bot connected");
 }
 
@@ -273,9 +353,10 @@ fn nothing_a_bot_writes_survives_its_match() {
         return;
     };
     for _ in 0..2 {
-        let r = attack("keep_file.py", &[], &[]);
-        contained(&r, 0);
-        assert!(stderr(&r).contains("HOSTILE INFO none"), "{}", stderr(&r));
+        for r in attack("keep_file.py", &[], &[]) {
+            contained(&r, 0);
+            assert!(stderr(&r).contains("HOSTILE INFO none"), "{}", stderr(&r));
+        }
     }
     assert!(!root().join(HOSTILE).join("kept.txt").exists());
 }
@@ -484,7 +565,7 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
         let r = run_match(&bot, &maze, 0, limits, &warm, |_| {}).await;
         // One warm sandbox plays every match: the same supervisor, nothing else idle.
         assert_eq!(full.warm.idle(), 1, "one warm sandbox, reused");
-        let serving = processes_matching("sandbox-serve");
+        let serving = crate::support::own_processes_matching("sandbox-serve");
         match &supervisor {
             None => supervisor = Some(serving),
             Some(first) => assert_eq!(&serving, first, "the same warm sandbox"),
@@ -534,7 +615,9 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
     assert_eq!(serving.len(), 3, "{serving:?}");
     drop(warm);
     assert!(
-        processes_matching("sandbox-serve").is_empty(),
+        processes_matching("sandbox-serve")
+            .iter()
+            .all(|pid| !serving.contains(pid)),
         "the warm sandbox ends with its runner"
     );
 }

@@ -109,6 +109,33 @@ pub fn processes_matching(needle: &str) -> Vec<u32> {
     found
 }
 
+/// [`processes_matching`], only those started by this test's process (its descendants).
+pub fn own_processes_matching(needle: &str) -> Vec<u32> {
+    let parent = |pid: u32| -> Option<u32> {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+        stat.rsplit_once(')')?
+            .1
+            .split_whitespace()
+            .nth(1)?
+            .parse()
+            .ok()
+    };
+    processes_matching(needle)
+        .into_iter()
+        .filter(|&pid| {
+            let mut at = pid;
+            for _ in 0..64 {
+                match parent(at) {
+                    Some(p) if p == std::process::id() => return true,
+                    Some(p) if p > 1 => at = p,
+                    _ => return false,
+                }
+            }
+            false
+        })
+        .collect()
+}
+
 /// Runs the real `mazearena` binary with `args` from the crate root (bots in the
 /// tests' [`sandbox`]).
 pub fn mazearena(args: &[&str]) -> Output {

@@ -120,6 +120,16 @@ pub fn exec(args: &JailArgs) -> String {
 }
 
 fn setup(args: &JailArgs) -> Result<(), String> {
+    walls(args, &super::seccomp::filters().map_err(|e| e.to_string())?)
+}
+
+/// Puts up every wall of the jail on this process, in order: resource limits, the uid
+/// (as root), `no_new_privs`, Landlock, then the seccomp `filters` (compiled by
+/// [`super::seccomp::filters`]). Everything it starts from then on inherits them.
+///
+/// # Errors
+/// The wall that could not be put up, and why.
+pub fn walls(args: &JailArgs, filters: &[seccompiler::BpfProgram]) -> Result<(), String> {
     let limit = |r: Resource, v: u64| setrlimit(r, v, v).map_err(|e| format!("{r:?}: {e}"));
     limit(Resource::RLIMIT_CORE, 0)?;
     if let Some(v) = args.fsize {
@@ -137,8 +147,8 @@ fn setup(args: &JailArgs) -> Result<(), String> {
     }
     nix::sys::prctl::set_no_new_privs().map_err(|e| format!("no_new_privs: {e}"))?;
     landlock().map_err(|e| format!("landlock: {e}"))?;
-    for filter in super::seccomp::filters().map_err(|e| e.to_string())? {
-        seccompiler::apply_filter(&filter).map_err(|e| format!("seccomp: {e}"))?;
+    for filter in filters {
+        seccompiler::apply_filter(filter).map_err(|e| format!("seccomp: {e}"))?;
     }
     Ok(())
 }

@@ -138,6 +138,8 @@ pub fn serve() -> Result<(), String> {
     if std::fs::read_dir("/proc/self/task").map_or(0, Iterator::count) != 1 {
         return Err("the supervisor must have one thread (it clones)".into());
     }
+    // Compiled once: every match's init applies the same filters.
+    let filters = super::seccomp::filters().map_err(|e| format!("seccomp: {e}"))?;
     reply(control, &Reply::Ready, &[]).map_err(|e| format!("cannot answer: {e}"))?;
     let mut buf = vec![0u8; MAX_MESSAGE];
     loop {
@@ -164,7 +166,7 @@ pub fn serve() -> Result<(), String> {
                 continue;
             }
         };
-        match start(&request, &jail, fds) {
+        match start(&request, &jail, &filters, fds) {
             Err(e) => reply(control, &Reply::Refused(e), &[]).map_err(|e| e.to_string())?,
             Ok((pidfd, pid)) => {
                 reply(control, &Reply::Started, &[pidfd.as_raw_fd()]).map_err(|e| e.to_string())?;
@@ -248,6 +250,7 @@ fn exit_code(status: libc::c_int) -> i32 {
 fn start(
     request: &Request,
     jail: &jail::JailArgs,
+    filters: &[seccompiler::BpfProgram],
     fds: [OwnedFd; REQUEST_FDS],
 ) -> Result<(OwnedFd, libc::pid_t), String> {
     let mut pidfd: libc::c_int = -1;
@@ -274,7 +277,7 @@ fn start(
             std::io::Error::last_os_error()
         )),
         0 => {
-            let code = match_init(request, jail, fds);
+            let code = match_init(request, jail, filters, fds);
             // SAFETY: ends the child without running anything of the parent's.
             unsafe { libc::_exit(code) }
         }
@@ -286,33 +289,74 @@ fn start(
     }
 }
 
-/// The match's init (PID 1 of the match's namespace): prepares the match's world,
-/// starts the bot's process and ends with it. Returns its exit code.
-fn match_init(request: &Request, jail: &jail::JailArgs, fds: [OwnedFd; REQUEST_FDS]) -> i32 {
+/// The match's init (PID 1 of the match's namespace): prepares the match's world as
+/// root, then puts up the jail's walls on itself (the match's uid, limits,
+/// `no_new_privs`, Landlock, seccomp) and only then starts the bot's program, which
+/// inherits every wall: from then on the init is one of the match's processes, with no
+/// more rights than the bot's. It reaps every orphan of the match and ends with the
+/// bot's process. Returns its exit code.
+fn match_init(
+    request: &Request,
+    jail: &jail::JailArgs,
+    filters: &[seccompiler::BpfProgram],
+    fds: [OwnedFd; REQUEST_FDS],
+) -> i32 {
     let [stdin, stdout, stderr, tree] = fds;
     // The runner's socket is not the match's.
     // SAFETY: closes descriptor 0 (the control socket) in this process only.
     unsafe { libc::close(0) };
     // SAFETY: prctl(2) with a signal number.
     unsafe { libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) };
-    if let Err(e) = prepare(request, &tree) {
+    let fail = |e: String| {
         say(&stderr, &format!("mazearena sandbox: {e}\n"));
-        return jail::SETUP_FAILED;
+        jail::SETUP_FAILED
+    };
+    if let Err(e) = prepare(request, &tree) {
+        return fail(e);
     }
+    // The match sees its init as `init`, not as the runner's helper.
+    name_this_process(b"init");
     drop(tree);
-    // SAFETY: fork(2) in a process of one thread.
-    let bot = unsafe { libc::fork() };
-    if bot == 0 {
-        let reason = bot_process(jail, &stdin, &stdout, &stderr);
-        // Descriptor 2 is the bot's stderr by now (or still the supervisor's).
-        eprintln!("mazearena sandbox: {reason}");
-        // SAFETY: ends the child.
-        unsafe { libc::_exit(jail::SETUP_FAILED) };
+    // Nothing but the bot's stdio passes to it.
+    // SAFETY: marks every descriptor from 3 up close-on-exec in this process.
+    if unsafe {
+        libc::syscall(
+            libc::SYS_close_range,
+            3u32,
+            u32::MAX,
+            libc::CLOSE_RANGE_CLOEXEC,
+        )
+    } != 0
+    {
+        return fail(format!("close_range: {}", std::io::Error::last_os_error()));
     }
+    if let Err(e) = std::env::set_current_dir(Path::new(SCRATCH).join("work")) {
+        return fail(format!("cannot enter the working directory: {e}"));
+    }
+    if let Err(e) = jail::walls(jail, filters) {
+        return fail(e);
+    }
+    let dup = |fd: &OwnedFd| fd.try_clone().map(std::process::Stdio::from);
+    let stdio = (dup(&stdin), dup(&stdout), dup(&stderr));
+    let (Ok(i), Ok(o), Ok(e)) = stdio else {
+        return fail("cannot pass the bot its pipes".into());
+    };
+    // The owner's variables reach the bot's own program alone, at its exec, after every
+    // wall: started with posix_spawn, nothing runs between fork and exec.
+    use std::os::unix::process::CommandExt;
+    let spawned = std::process::Command::new(&jail.command[0])
+        .args(&jail.command[1..])
+        .envs(jail.env.iter().map(|(k, v)| (k, v)))
+        .stdin(i)
+        .stdout(o)
+        .stderr(e)
+        .process_group(0)
+        .spawn();
+    let bot = match spawned {
+        Ok(child) => child.id() as libc::pid_t,
+        Err(e) => return fail(format!("could not start {:?}: {e}", jail.command[0])),
+    };
     drop((stdin, stdout, stderr));
-    if bot < 0 {
-        return jail::SETUP_FAILED;
-    }
     loop {
         let mut status = 0;
         // SAFETY: reaps any child (orphans of the match are adopted here).
@@ -326,37 +370,39 @@ fn match_init(request: &Request, jail: &jail::JailArgs, fds: [OwnedFd; REQUEST_F
     }
 }
 
+/// Renames this process as its match sees it in `/proc` (`cmdline` and `comm`):
+/// the command line's memory is overwritten in place, as `setproctitle` does.
+fn name_this_process(name: &[u8]) {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return;
+    };
+    // Fields 48 and 49 of stat(5): where the command line lies in memory.
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or(Vec::new(), |(_, rest)| rest.split_whitespace().collect());
+    let at = |n: usize| fields.get(n - 3).and_then(|f| f.parse::<usize>().ok());
+    let (Some(start), Some(end)) = (at(48), at(49)) else {
+        return;
+    };
+    if end <= start || name.len() >= end - start {
+        return;
+    }
+    // SAFETY: [start, end) is this process's own command line, which nothing reads
+    // from now on; it is zeroed, then the name written at its start.
+    unsafe {
+        std::ptr::write_bytes(start as *mut u8, 0, end - start);
+        std::ptr::copy_nonoverlapping(name.as_ptr(), start as *mut u8, name.len());
+    }
+    if let Ok(comm) = std::ffi::CString::new(name) {
+        // SAFETY: prctl(2) with a NUL-terminated name.
+        unsafe { libc::prctl(libc::PR_SET_NAME, comm.as_ptr()) };
+    }
+}
+
 /// Writes `text` to a descriptor, ignoring failures (a message on the bot's stderr).
 fn say(fd: &OwnedFd, text: &str) {
     // SAFETY: write(2) of a live buffer.
     unsafe { libc::write(fd.as_raw_fd(), text.as_ptr().cast(), text.len()) };
-}
-
-/// The bot's process: its stdio, a session of its own, the working directory, then the
-/// jail step. Returns only on failure, with the reason.
-fn bot_process(
-    jail: &jail::JailArgs,
-    stdin: &OwnedFd,
-    stdout: &OwnedFd,
-    stderr: &OwnedFd,
-) -> String {
-    for (fd, to) in [(stdin, 0), (stdout, 1), (stderr, 2)] {
-        // SAFETY: dup2(2) onto the standard descriptors of this process.
-        if unsafe { libc::dup2(fd.as_raw_fd(), to) } < 0 {
-            return format!("dup2: {}", std::io::Error::last_os_error());
-        }
-    }
-    // SAFETY: closes every other descriptor of this process (the standard ones stay).
-    if unsafe { libc::syscall(libc::SYS_close_range, 3u32, u32::MAX, 0u32) } != 0 {
-        return format!("close_range: {}", std::io::Error::last_os_error());
-    }
-    if nix::unistd::setsid().is_err() {
-        return "setsid failed".into();
-    }
-    if let Err(e) = std::env::set_current_dir(Path::new(SCRATCH).join("work")) {
-        return format!("cannot enter the working directory: {e}");
-    }
-    jail::exec(jail)
 }
 
 /// The match's own world, made in its fresh mount namespace: `/proc` of its PID
