@@ -22,6 +22,15 @@
 #    kernel's own work for the sandbox, e.g. a network namespace's clean-up, is done by
 #    kernel threads outside the match's processes).
 #
+# 4. A warm sandbox's cost per match (what servers, workers and tournaments pay, as root
+#    with cgroups): the same 100-step match in a `tournament` of one slot (`--jobs 1`),
+#    repeated 20 and 120 times, with and without the sandbox, in turn RUNS times; a
+#    match's cost is (120 repeats - 20 repeats) / 100 of each, so the tournament's own
+#    start (and the sandbox's first start and test) is not in it.
+# 5. The floor of a one-shot sandbox: bubblewrap making the same namespaces (PID,
+#    network, IPC, UTS, mount) with only /usr in the view and running /usr/bin/true,
+#    against /usr/bin/true alone, in turn (medians of the paired differences).
+#
 # With BASELINE=path/to/an/earlier/mazearena, each sandboxed measure is also taken with it,
 # in turn with the others (its stages too).
 #
@@ -94,6 +103,30 @@ for i in 1 2 3; do
   echo "full $(tournament full "$bin")"
   [ -z "$BASELINE" ] || echo "before $(tournament full "$BASELINE")"
 done >"$tmp/tournament.txt"
+
+# A warm sandbox's cost per match: one slot, 20 and 120 repeats of the 100-step match.
+printf 'name = "trivial"\ncommand = "./trivial_bot script.txt %s"\n' "$IDLE" >"$tmp/bot/bot.toml"
+repeats() { # $1: sandbox, $2: repeats -> wall µs
+  local a b
+  rm -f "$tmp"/w.db*
+  a=$(date +%s%N)
+  "$bin" tournament --bots "$tmp/bot/bot.toml" --mazes "$maze" --repeats "$2" --jobs 1 \
+    --sandbox "$1" --database "sqlite://$tmp/w.db" >/dev/null 2>&1
+  b=$(date +%s%N)
+  echo $(( (b - a) / 1000 ))
+}
+for i in $(seq "$RUNS"); do
+  echo "$(repeats none 20) $(repeats none 120) $(repeats full 20) $(repeats full 120)"
+done >"$tmp/warm.txt"
+# The one-shot floor: bubblewrap's namespaces around /usr/bin/true.
+floor_ns=(--unshare-pid --unshare-net --unshare-ipc --unshare-uts --ro-bind /usr /usr)
+for d in /bin /lib /lib64 /sbin; do
+  if [ -L "$d" ]; then floor_ns+=(--symlink "$(readlink "$d")" "$d"); fi
+done
+timed() { local a b; a=$(date +%s%N); "$@" >/dev/null 2>&1; b=$(date +%s%N); echo $(( (b - a) / 1000 )); }
+for i in $(seq $((RUNS * 3))); do
+  echo "$(timed /usr/bin/true) $(timed bwrap "${floor_ns[@]}" /usr/bin/true)"
+done >"$tmp/floor.txt"
 
 python3 - "$tmp" "$RUNS" "$BASELINE" <<'PY'
 import os, statistics, sys
@@ -175,4 +208,20 @@ for k in t:
     wall = med(r[0] for r in t[k])
     n = t[k][0][2]
     print(f"| {names[k]} | {wall / 1000:.2f} | {n / wall * 1000:.0f} | {base / wall:.2f} | {med(r[1] for r in t[k]) / 1000:.2f} |")
+print()
+warm = [tuple(int(x) for x in l.split()) for l in open(f"{tmp}/warm.txt")]
+per = lambda a, b: [(w[b] - w[a]) / 100 for w in warm]
+n_match, f_match = per(0, 1), per(2, 3)
+print(f"| a warm sandbox: the 100-step match in a one-slot tournament, (120 - 20 repeats) / 100 ({runs} runs, in turn, medians) | ms a match |")
+print("|---|---:|")
+print(f"| `--sandbox none` | {med(n_match) / 1000:.2f} |")
+print(f"| `--sandbox full` (a warm sandbox) | {med(f_match) / 1000:.2f} |")
+print(f"| the warm sandbox's cost per match (paired differences) | **{med(f - n for f, n in zip(f_match, n_match)) / 1000:.2f}** |")
+print()
+floor = [tuple(int(x) for x in l.split()) for l in open(f"{tmp}/floor.txt")]
+print(f"| the one-shot floor ({len(floor)} runs, in turn, medians) | ms |")
+print("|---|---:|")
+print(f"| `/usr/bin/true` | {med(f[0] for f in floor) / 1000:.2f} |")
+print(f"| `bwrap` (PID, network, IPC, UTS, mount namespaces; `/usr` only) `/usr/bin/true` | {med(f[1] for f in floor) / 1000:.2f} |")
+print(f"| bubblewrap's namespaces alone (paired differences) | **{med(f[1] - f[0] for f in floor) / 1000:.2f}** |")
 PY
