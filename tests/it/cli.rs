@@ -815,10 +815,30 @@ fn doctor_exits_1_when_the_full_sandbox_cannot_run_and_0_when_it_can() {
         String::from_utf8_lossy(&out.stderr).contains("bubblewrap"),
         "{out:?}"
     );
-    assert!(String::from_utf8_lossy(&out.stdout).contains("sandbox level: none"));
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(stdout.contains("sandbox level: none"));
+    let line = |text: &str, name: &str| -> (bool, String) {
+        let l = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap_or_else(|| panic!("no {name} line: {text}"))
+            .to_string();
+        (l.split_whitespace().nth(1) == Some("ok"), l)
+    };
+    let (warm_ok, warm) = line(&stdout, "warm");
+    assert!(
+        !warm_ok && warm.contains("not used here: no sandbox"),
+        "{warm}"
+    );
     if crate::support::sandbox().level() == "full" {
         let out = mazearena(&["doctor"]);
         assert_eq!(out.status.code(), Some(0), "{out:?}");
+        // Warm sandboxes wherever each match can have its own uid and cgroup.
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        let (cgroups_ok, _) = line(&stdout, "cgroups");
+        let (warm_ok, warm) = line(&stdout, "warm");
+        let root = nix::unistd::geteuid().is_root();
+        assert_eq!(warm_ok, root && cgroups_ok, "{warm}");
     }
     // A usage error stays 2.
     assert_eq!(

@@ -419,6 +419,24 @@ impl Sandbox {
                 ),
             },
         ));
+        let warm = match (&result, root, &cg) {
+            (Err(_), _, _) => Err("no sandbox".to_string()),
+            (Ok(_), false, _) => Err("not root (each match needs a uid of its own)".into()),
+            (Ok(_), true, Err(_)) => {
+                Err("no cgroups (limits must hold for the match alone)".into())
+            }
+            (Ok(_), true, Ok(_)) => Ok(()),
+        };
+        checks.push(check(
+            "warm",
+            warm.is_ok(),
+            match warm {
+                Ok(()) => "servers, workers and tournaments keep a sandbox per worker slot and \
+                    give each match new PID, mount and IPC namespaces in it"
+                    .into(),
+                Err(why) => format!("not used here: {why}; every match gets a sandbox of its own"),
+            },
+        ));
         let runtimes = match &result {
             Ok(Sandbox::Full(f)) => f.runtimes.clone(),
             _ => Vec::new(),
