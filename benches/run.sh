@@ -105,9 +105,11 @@ log "the sandbox's cost per match"
   echo
   echo "### Where it goes"
   echo
-  echo "\`bash benches/sandbox_cost.sh $STEP_RUNS\`: a 100-step \`mazearena run\` with and without the"
-  echo "sandbox in turn, the sandboxed run's stages from perf's tracepoints, and a 240-match"
-  echo "tournament of the C kit (the script's header says what each stage holds)."
+  echo "\`bash benches/sandbox_cost.sh $STEP_RUNS\`: a 100-step \`mazearena run\` (a one-shot sandbox) with and"
+  echo "without the sandbox in turn, the sandboxed run's stages from perf's tracepoints, a 240-match"
+  echo "tournament of the C kit, the same 100-step match played over and over in a one-slot"
+  echo "tournament (a warm sandbox: its cost per match), and the floor of any one-shot sandbox"
+  echo "(bubblewrap's namespaces around \`/usr/bin/true\`). The script's header says what each holds."
   echo
   if command -v perf >/dev/null 2>&1; then
     bash benches/sandbox_cost.sh "$STEP_RUNS"

@@ -282,17 +282,27 @@ pub fn start_match(
         stdio.stderr.as_raw_fd(),
         tree.as_raw_fd(),
     ];
-    let mut sandbox = match full.warm.take(&key) {
-        Some(s) => s,
-        None => WarmSandbox::start(full, &key, memory, pids)?,
+    // An idle sandbox that passed its checks may still be gone by the time the request
+    // is sent (its supervisor ended): then a new one is started, once. A request that was
+    // sent is never sent again.
+    let mut idle = full.warm.take(&key);
+    let sandbox = loop {
+        let reused = idle.is_some();
+        let mut sandbox = match idle.take() {
+            Some(s) => s,
+            None => WarmSandbox::start(full, &key, memory, pids)?,
+        };
+        sandbox
+            .cgroup
+            .limit(memory, pids)
+            .map_err(|e| format!("the match's cgroup: {e}"))?;
+        sandbox.cgroup.mark();
+        match supervisor::send(sandbox.control.as_fd(), &message, &fds) {
+            Ok(()) => break sandbox,
+            Err(_) if reused => continue,
+            Err(e) => return Err(format!("the warm sandbox's supervisor: {e}")),
+        }
     };
-    sandbox
-        .cgroup
-        .limit(memory, pids)
-        .map_err(|e| format!("the match's cgroup: {e}"))?;
-    sandbox.cgroup.mark();
-    supervisor::send(sandbox.control.as_fd(), &message, &fds)
-        .map_err(|e| format!("the warm sandbox's supervisor: {e}"))?;
     drop((stdio, tree));
     match sandbox.answer()? {
         (Reply::Started, mut fds) if fds.len() == 1 => {
@@ -460,4 +470,61 @@ pub fn plan(
         return Ok(None);
     }
     view::linkable_entries(bot_dir, true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::fs::PermissionsExt;
+
+    fn sandbox(reuse: bool, as_root: bool, cgroups: bool) -> FullSandbox {
+        FullSandbox {
+            bwrap: "/usr/bin/bwrap".into(),
+            helper: "/usr/bin/true".into(),
+            as_root,
+            cgroups: if cgroups {
+                Ok(super::super::cgroup::CgroupRoot::V2 {
+                    base: "/sys/fs/cgroup/x".into(),
+                })
+            } else {
+                Err("none in this test".into())
+            },
+            runtimes: Vec::new(),
+            detect: false,
+            hide: Vec::new(),
+            reuse,
+            warm: WarmPool::default(),
+            detected: Default::default(),
+        }
+    }
+
+    #[test]
+    fn a_match_is_warm_only_as_root_with_cgroups_a_linkable_folder_and_no_runtime_in_tmp() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("bot");
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+        std::fs::write(dir.join("b.py"), "").unwrap();
+        std::fs::write(dir.join("a.py"), "").unwrap();
+        let plan_of =
+            |full: &FullSandbox, runtimes: &[Runtime]| plan(full, &dir, runtimes).unwrap();
+        let names = plan_of(&sandbox(true, true, true), &[]);
+        assert_eq!(names, Some(vec!["a.py".into(), "b.py".into()]));
+        // A runner of one match, not root, or without cgroups: a one-shot sandbox.
+        assert_eq!(plan_of(&sandbox(false, true, true), &[]), None);
+        assert_eq!(plan_of(&sandbox(true, false, true), &[]), None);
+        assert_eq!(plan_of(&sandbox(true, true, false), &[]), None);
+        // A runtime under /tmp lives in the scratch area, made anew for each match.
+        let in_tmp = Runtime {
+            prefix: "/tmp/venv".into(),
+            why: "test".into(),
+        };
+        assert_eq!(plan_of(&sandbox(true, true, true), &[in_tmp]), None);
+        // An entry that is a link, and a folder the match's uid cannot pass through.
+        std::os::unix::fs::symlink("a.py", dir.join("c.py")).unwrap();
+        assert_eq!(plan_of(&sandbox(true, true, true), &[]), None);
+        std::fs::remove_file(dir.join("c.py")).unwrap();
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).unwrap();
+        assert_eq!(plan_of(&sandbox(true, true, true), &[]), None);
+    }
 }
