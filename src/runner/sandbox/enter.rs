@@ -80,6 +80,41 @@ pub fn exec(args: &EnterArgs) -> String {
     format!("could not start {:?}: {err}", args.command[0])
 }
 
+/// The cgroup join of [`exec`] for a forked child, run between `fork` and `exec` (a
+/// `pre_exec` hook): writes `0` to each file of `join`. The paths are made into C
+/// strings here, before the fork; the hook itself only opens, writes and closes. The
+/// forked child has one thread, so joining by `tasks` moves all of it.
+pub fn join_in_child(
+    join: &[PathBuf],
+) -> impl FnMut() -> std::io::Result<()> + Send + Sync + 'static {
+    use std::os::unix::ffi::OsStrExt;
+    let paths: Vec<std::ffi::CString> = join
+        .iter()
+        .filter_map(|p| std::ffi::CString::new(p.as_os_str().as_bytes()).ok())
+        .collect();
+    let complete = paths.len() == join.len();
+    move || {
+        if !complete {
+            return Err(std::io::Error::other("a cgroup path holds a NUL byte"));
+        }
+        for path in &paths {
+            // SAFETY: open(2), write(2) and close(2) with a live NUL-terminated path and
+            // buffer; nothing else runs in the forked child.
+            let fd = unsafe { libc::open(path.as_ptr(), libc::O_WRONLY | libc::O_CLOEXEC) };
+            if fd < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            let written = unsafe { libc::write(fd, b"0".as_ptr().cast(), 1) };
+            let err = std::io::Error::last_os_error();
+            unsafe { libc::close(fd) };
+            if written != 1 {
+                return Err(err);
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,6 +165,22 @@ mod tests {
             "nothing joined"
         );
         assert!(!marker.exists());
+    }
+
+    #[test]
+    fn a_forked_child_joins_by_writing_0_and_a_missing_cgroup_stops_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a/tasks"), dir.path().join("b/tasks"));
+        for f in [&a, &b] {
+            std::fs::create_dir_all(f.parent().unwrap()).unwrap();
+            std::fs::write(f, "").unwrap();
+        }
+        join_in_child(&[a.clone(), b.clone()])().unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "0");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "0");
+        let missing = dir.path().join("gone/tasks");
+        let err = join_in_child(&[missing])().unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::NotFound);
     }
 
     #[test]

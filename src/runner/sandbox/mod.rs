@@ -161,6 +161,20 @@ impl FullSandbox {
                 cmd.args(tail);
                 cmd
             }
+            // A runner of one match (`mazearena run`) is a small process of few threads:
+            // its child joins the cgroup itself between fork and bubblewrap's exec, which
+            // saves the exec of this binary as `sandbox-enter` (BENCHMARKS.md, "The
+            // sandbox's cost per match"). A server or a tournament keeps posix_spawn.
+            Some(cgroup) if !self.reuse => {
+                let join = enter::join_in_child(&cgroup.join_files());
+                let mut cmd = std::process::Command::new(&self.bwrap);
+                cmd.args(tail);
+                use std::os::unix::process::CommandExt;
+                // SAFETY: the closure only opens, writes and closes files by paths made
+                // before the fork (async-signal-safe system calls, no allocation).
+                unsafe { cmd.pre_exec(join) };
+                cmd
+            }
             Some(cgroup) => {
                 let enter = enter::EnterArgs {
                     join: cgroup.join_files(),
