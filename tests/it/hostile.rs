@@ -72,21 +72,18 @@ fn attack_one_shot(script: &str, args: &[&str], extra: &[&str]) -> Value {
     record
 }
 
-/// The warm sandbox of this test's process (a runner of many matches, finding each
-/// bot's runtime as `run` and `tournament` do).
-fn warm_sandbox() -> &'static mazearena::runner::Sandbox {
-    static WARM: std::sync::OnceLock<mazearena::runner::Sandbox> = std::sync::OnceLock::new();
-    WARM.get_or_init(|| {
-        mazearena::runner::Sandbox::full(
-            Path::new(env!("CARGO_BIN_EXE_mazearena")),
-            &mazearena::runner::sandbox::Setup {
-                detect: true,
-                reuse: true,
-                ..Default::default()
-            },
-        )
-        .unwrap()
-    })
+thread_local! {
+    /// The warm sandboxes of this test (a runner of many matches, finding each bot's
+    /// runtime as `run` and `tournament` do), its own even where tests share a process.
+    static WARM: mazearena::runner::Sandbox = mazearena::runner::Sandbox::full(
+        Path::new(env!("CARGO_BIN_EXE_mazearena")),
+        &mazearena::runner::sandbox::Setup {
+            detect: true,
+            reuse: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
 }
 
 fn attack_warm(script: &str, args: &[&str], extra: &[&str]) -> Value {
@@ -100,19 +97,22 @@ fn attack_warm(script: &str, args: &[&str], extra: &[&str]) -> Value {
     let spec = BotSpec::new(bot.clone(), root().join(HOSTILE));
     // One core for the referee and the bot, as `run` and a server's workers have.
     mazearena::runner::affinity::pin_to_this_core();
+    let sandbox = WARM.with(Clone::clone);
+    let mazearena::runner::Sandbox::Full(full) = &sandbox else {
+        unreachable!("a full sandbox")
+    };
+    let before = full.warm.matches_started();
     let record = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
         .unwrap()
-        .block_on(run_match(&spec, &maze, 0, limits, warm_sandbox(), |_| {}));
+        .block_on(run_match(&spec, &maze, 0, limits, &sandbox, |_| {}));
     let record = serde_json::to_value(record.summary()).unwrap();
     assert_eq!(record["limits"]["sandbox"], "full");
-    let mazearena::runner::Sandbox::Full(full) = warm_sandbox() else {
-        unreachable!("a full sandbox")
-    };
-    if nix::unistd::geteuid().is_root() {
-        assert!(
-            full.warm.idle() >= 1,
+    if nix::unistd::geteuid().is_root() && full.cgroups.is_ok() {
+        assert_eq!(
+            full.warm.matches_started(),
+            before + 1,
             "the match was played in a warm sandbox"
         );
     }
@@ -479,7 +479,7 @@ async fn hostile_bots_on_a_real_server_are_contained_and_an_honest_match_is_unaf
         // As root with cgroups, the server's workers played in warm sandboxes: the
         // honest matches above ran right after each attack in the same ones.
         assert!(
-            !crate::support::own_processes_matching("sandbox-serve").is_empty(),
+            !crate::support::descendants_matching("sandbox-serve", server.pid()).is_empty(),
             "the server keeps warm sandboxes"
         );
     }
@@ -571,9 +571,9 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
     let mut play = async |script: &str| {
         let bot = BotSpec::new(format!("python3 {script}"), root().join(HOSTILE));
         let r = run_match(&bot, &maze, 0, limits, &warm, |_| {}).await;
-        // One warm sandbox plays every match: the same supervisor, nothing else idle.
-        assert_eq!(full.warm.idle(), 1, "one warm sandbox, reused");
-        let serving = crate::support::own_processes_matching("sandbox-serve");
+        // One warm sandbox plays every match: the same one is idle after each.
+        let serving = full.warm.idle_pids();
+        assert_eq!(serving.len(), 1, "one warm sandbox, reused: {serving:?}");
         match &supervisor {
             None => supervisor = Some(serving),
             Some(first) => assert_eq!(&serving, first, "the same warm sandbox"),
@@ -618,14 +618,23 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
         quiet < spun,
         "the spinning match's CPU time ({spun} ms) must not reach the next one ({quiet} ms)"
     );
-    // bubblewrap's two processes and the supervisor, the same from the first match on.
-    let serving = supervisor.clone().unwrap();
-    assert_eq!(serving.len(), 3, "{serving:?}");
+    // The sandbox's processes (bubblewrap's two and the supervisor) end with its runner.
+    let outer = supervisor.clone().unwrap()[0];
+    let family = |pid: u32| {
+        pid == outer
+            || crate::support::parent_of(pid) == Some(outer)
+            || crate::support::parent_of(pid).and_then(crate::support::parent_of) == Some(outer)
+    };
+    let ours: Vec<u32> = processes_matching("sandbox-serve")
+        .into_iter()
+        .filter(|&pid| family(pid))
+        .collect();
+    assert_eq!(ours.len(), 3, "{ours:?}");
     drop(warm);
     assert!(
         processes_matching("sandbox-serve")
             .iter()
-            .all(|pid| !serving.contains(pid)),
+            .all(|pid| !ours.contains(pid)),
         "the warm sandbox ends with its runner"
     );
 }

@@ -109,24 +109,26 @@ pub fn processes_matching(needle: &str) -> Vec<u32> {
     found
 }
 
-/// [`processes_matching`], only those started by this test's process (its descendants).
-pub fn own_processes_matching(needle: &str) -> Vec<u32> {
-    let parent = |pid: u32| -> Option<u32> {
-        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-        stat.rsplit_once(')')?
-            .1
-            .split_whitespace()
-            .nth(1)?
-            .parse()
-            .ok()
-    };
+/// The parent of process `pid`, while it lives.
+pub fn parent_of(pid: u32) -> Option<u32> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat.rsplit_once(')')?
+        .1
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()
+}
+
+/// [`processes_matching`], only the descendants of process `ancestor`.
+pub fn descendants_matching(needle: &str, ancestor: u32) -> Vec<u32> {
     processes_matching(needle)
         .into_iter()
         .filter(|&pid| {
             let mut at = pid;
             for _ in 0..64 {
-                match parent(at) {
-                    Some(p) if p == std::process::id() => return true,
+                match parent_of(at) {
+                    Some(p) if p == ancestor => return true,
                     Some(p) if p > 1 => at = p,
                     _ => return false,
                 }

@@ -27,8 +27,11 @@ use super::supervisor::{self, Reply, Request};
 use super::view::{self, Runtime, Work};
 use super::{FullSandbox, SERVE_SUBCOMMAND};
 
-/// Idle warm sandboxes kept at most; the oldest goes first.
-pub const IDLE_MAX: usize = 8;
+/// Idle warm sandboxes kept at most: two per core, and at least 8; the oldest goes
+/// first.
+pub fn idle_max() -> usize {
+    std::thread::available_parallelism().map_or(8, |n| (2 * n.get()).max(8))
+}
 
 /// A warm sandbox's own processes, counted by its cgroup's process limit on top of the
 /// bot's: bubblewrap's two, the supervisor and the match's init.
@@ -57,9 +60,24 @@ pub struct WarmKey {
 #[derive(Debug, Default)]
 pub struct WarmPool {
     idle: Mutex<Vec<(WarmKey, WarmSandbox)>>,
+    /// Matches started in warm sandboxes so far.
+    started: std::sync::atomic::AtomicU64,
 }
 
 impl WarmPool {
+    /// How many matches were started in warm sandboxes of this pool.
+    pub fn matches_started(&self) -> u64 {
+        self.started.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// The outer process (bubblewrap's) of each idle sandbox, oldest first.
+    pub fn idle_pids(&self) -> Vec<u32> {
+        self.idle
+            .lock()
+            .map(|i| i.iter().map(|(_, s)| s.child.id()).collect())
+            .unwrap_or_default()
+    }
+
     /// An idle sandbox for `key` that passes its checks, if there is one.
     fn take(&self, key: &WarmKey) -> Option<WarmSandbox> {
         loop {
@@ -81,7 +99,7 @@ impl WarmPool {
         let evicted = {
             let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
             idle.push((key, sandbox));
-            (idle.len() > IDLE_MAX).then(|| idle.remove(0))
+            (idle.len() > idle_max()).then(|| idle.remove(0))
         };
         drop(evicted);
     }
@@ -283,8 +301,8 @@ pub fn start_match(
         tree.as_raw_fd(),
     ];
     // An idle sandbox that passed its checks may still be gone by the time the request
-    // is sent (its supervisor ended): then a new one is started, once. A request that was
-    // sent is never sent again.
+    // is sent (its supervisor ended), or may not take the match's limits: then a new one
+    // is started, once. A request that was sent is never sent again.
     let mut idle = full.warm.take(&key);
     let sandbox = loop {
         let reused = idle.is_some();
@@ -292,10 +310,13 @@ pub fn start_match(
             Some(s) => s,
             None => WarmSandbox::start(full, &key, memory, pids)?,
         };
-        sandbox
-            .cgroup
-            .limit(memory, pids)
-            .map_err(|e| format!("the match's cgroup: {e}"))?;
+        // A lower memory limit than a reused cgroup holds (the kernel could not reclaim
+        // enough) is no reason to fail the match: a new sandbox is started.
+        match sandbox.cgroup.limit(memory, pids) {
+            Ok(()) => {}
+            Err(_) if reused => continue,
+            Err(e) => return Err(format!("the match's cgroup: {e}")),
+        }
         sandbox.cgroup.mark();
         match supervisor::send(sandbox.control.as_fd(), &message, &fds) {
             Ok(()) => break sandbox,
@@ -308,6 +329,9 @@ pub fn start_match(
         (Reply::Started, mut fds) if fds.len() == 1 => {
             let pidfd = fds.remove(0);
             let init_pid = pid_of(&pidfd).ok_or("the match's init is not found")?;
+            full.warm
+                .started
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             Ok(WarmMatch {
                 full: full.clone(),
                 key,
