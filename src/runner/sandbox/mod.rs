@@ -10,6 +10,12 @@
 //! Limits hold for the whole match, every process together: a cgroup ([`cgroup`], v1 or
 //! v2) where one can be made, else a watchdog over the process tree ([`proctree`]).
 //!
+//! A runner of many matches (a server, a worker, a tournament) keeps **warm sandboxes**
+//! ([`warm`]): bubblewrap and the view made once per worker slot, and for each match new
+//! PID, mount and IPC namespaces, `/proc` and scratch area made inside by a supervisor
+//! ([`supervisor`]), with the same jail step. `mazearena run` and builds use a one-shot
+//! sandbox.
+//!
 //! [`Sandbox::None`] runs the bot directly as the server's user: only for bots you trust.
 
 pub mod cgroup;
