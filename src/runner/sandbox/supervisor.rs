@@ -8,10 +8,10 @@
 //! supervisor clones a fresh **match init** into new PID, mount and IPC namespaces,
 //! which mounts a fresh `/proc` (this match's processes only), a fresh scratch tmpfs
 //! (`/sandbox`: `tmp/` and `work/`, with a link per entry of the bot's folder), attaches
-//! the bot's folder at [`super::view::BOT_FILES`], and forks the bot's process, which
-//! goes through the same jail step as in a one-shot sandbox ([`super::jail::exec`]: uid,
-//! limits, `no_new_privs`, Landlock, seccomp) before its `exec`. When the bot's process
-//! ends, the init ends, and the kernel kills whatever is left in its PID namespace; the
+//! the bot's folder at `/run/mazearena/bot`, then puts up the jail's walls on itself
+//! ([`super::jail::walls`]: uid, limits, `no_new_privs`, Landlock, seccomp) and only then
+//! starts the bot's program, which inherits them all. When the bot's process ends, the
+//! init ends, and the kernel kills whatever is left in its PID namespace; the
 //! mount and IPC namespaces, with the scratch area and every IPC object, go with the
 //! last process. Nothing of a match is left for the next one: not a process, a file, an
 //! IPC object or a PID number.
