@@ -161,8 +161,8 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
                 dir: launch.dir.display().to_string(),
                 source,
             };
-            if let Some(entries) = warm::plan(full, launch.dir, &runtimes).map_err(spawn_error)? {
-                return spawn_warm(launch, &words, full, runtimes, entries, uid);
+            if warm::plan(full, launch.dir, &runtimes).map_err(spawn_error)? {
+                return spawn_warm(launch, &words, full, runtimes, uid);
             }
             let cgroup = match &full.cgroups {
                 Ok(root) => Some(
@@ -255,18 +255,15 @@ fn jail_args(
     }
 }
 
-/// Starts the bot in a warm sandbox ([`warm`]) of `full`, with `entries` of its folder
-/// linked in its working directory.
+/// Starts the bot in a warm sandbox ([`warm`]) of `full`.
 fn spawn_warm(
     launch: &Launch<'_>,
     words: &[String],
     full: &std::sync::Arc<super::sandbox::FullSandbox>,
     runtimes: Vec<super::sandbox::Runtime>,
-    entries: Vec<std::ffi::OsString>,
     uid: Option<UidLease>,
 ) -> Result<BotProcess, LaunchError> {
-    use std::os::unix::ffi::OsStringExt;
-    let sandbox_error = |e: String| LaunchError::Sandbox(e);
+    let sandbox_error = LaunchError::Sandbox;
     let pipe = || {
         nix::unistd::pipe2(nix::fcntl::OFlag::O_CLOEXEC)
             .map_err(|e| sandbox_error(format!("pipe: {e}")))
@@ -276,7 +273,6 @@ fn spawn_warm(
     let (stderr_ours, stderr_bot) = pipe()?;
     let request = supervisor::Request {
         scratch_bytes: launch.scratch_bytes,
-        entries: entries.into_iter().map(OsStringExt::into_vec).collect(),
         jail: jail_args(launch, words, uid.as_ref(), true)
             .to_args()
             .into_iter()
@@ -510,9 +506,12 @@ impl BotProcess {
 
     /// Kills every process of the bot: its cgroup, its process tree and its group.
     pub fn kill_all(&self) {
-        // A warm sandbox's cgroup holds the sandbox too: the match goes with its init.
+        // A warm sandbox's cgroup holds the sandbox too, and its init's pid is not the
+        // runner's child: the match goes with its init, killed through its pidfd (never
+        // by a pid that may have been reused), and takes its PID namespace with it.
         if let Started::Warm(warm, _) = &self.started {
             warm.kill();
+            return;
         }
         if let Some(cg) = &self.cgroup {
             cg.kill_all();

@@ -638,3 +638,50 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
         "the warm sandbox ends with its runner"
     );
 }
+
+/// A bot folder of 1,500 entries with names of 200 bytes plays in a warm sandbox like any
+/// other: its names never travel to the sandbox (the match's init lists the folder,
+/// behind the walls), so no request grows with them.
+#[tokio::test]
+async fn a_folder_of_many_long_names_plays_in_a_warm_sandbox() {
+    use mazearena::runner::{BotSpec, Limits, MatchStatus, run_match};
+    let Some(_) = full_sandbox("hostile warm names") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("bot");
+    std::fs::create_dir(&dir).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+    for (name, text) in simple_bot_files().as_object().unwrap() {
+        std::fs::write(dir.join(name), text.as_str().unwrap()).unwrap();
+    }
+    for i in 0..1500 {
+        std::fs::write(dir.join(format!("{i:04}{}", "n".repeat(196))), "").unwrap();
+    }
+    let sandbox = WARM.with(Clone::clone);
+    let mazearena::runner::Sandbox::Full(full) = &sandbox else {
+        unreachable!("a full sandbox")
+    };
+    let before = full.warm.matches_started();
+    let bot = BotSpec::new("python3 simple_bot.py", &dir);
+    let r = run_match(
+        &bot,
+        &crate::support::classic(1),
+        0,
+        Limits::default(),
+        &sandbox,
+        |_| {},
+    )
+    .await;
+    assert_eq!(
+        r.status,
+        MatchStatus::Finished,
+        "{:?} {}",
+        r.error,
+        r.stderr_tail
+    );
+    if nix::unistd::geteuid().is_root() && full.cgroups.is_ok() {
+        assert_eq!(full.warm.matches_started(), before + 1, "played warm");
+    }
+}

@@ -380,9 +380,8 @@ impl MatchCgroup {
     /// Starts a new match in this cgroup: from now on [`MatchCgroup::cpu_us`] and
     /// [`MatchCgroup::limit_hit`] count from here.
     pub fn mark(&mut self) {
-        self.marks = Marks::default();
         self.marks = Marks {
-            cpu_us: self.cpu_us().unwrap_or(0),
+            cpu_us: self.cpu_total_us().unwrap_or(0),
             oom_kills: self.oom_kills(),
             refused_forks: self.refused_forks(),
         };
@@ -415,15 +414,19 @@ impl MatchCgroup {
 
     /// CPU time used by every process that ran in the cgroup in this match, in µs.
     pub fn cpu_us(&self) -> Option<u64> {
+        Some(self.cpu_total_us()?.saturating_sub(self.marks.cpu_us))
+    }
+
+    /// CPU time used by every process that ever ran in the cgroup, in µs.
+    fn cpu_total_us(&self) -> Option<u64> {
         let text = match &self.cpu_counter {
             Some(counter) => counter.read()?,
             None => std::fs::read_to_string(&self.cpu_usage).ok()?,
         };
-        let total = match self.version {
+        match self.version {
             CgroupRoot::V1 { .. } => text.trim().parse::<u64>().ok().map(|ns| ns / 1000),
             CgroupRoot::V2 { .. } => counter(&text, "usage_usec"),
-        }?;
-        Some(total.saturating_sub(self.marks.cpu_us))
+        }
     }
 
     /// The first limit found hit, if any: an OOM kill, or a refused fork.

@@ -439,13 +439,9 @@ impl Sandbox {
                 ),
             },
         ));
-        let warm = match (&result, root, &cg) {
-            (Err(_), _, _) => Err("no sandbox".to_string()),
-            (Ok(_), false, _) => Err("not root (each match needs a uid of its own)".into()),
-            (Ok(_), true, Err(_)) => {
-                Err("no cgroups (limits must hold for the match alone)".into())
-            }
-            (Ok(_), true, Ok(_)) => Ok(()),
+        let warm = match &result {
+            Err(_) => Err("no sandbox"),
+            Ok(_) => warm::unavailable(root, cg.is_ok()).map_or(Ok(()), Err),
         };
         checks.push(check(
             "warm",

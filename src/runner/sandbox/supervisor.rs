@@ -7,10 +7,10 @@
 //! stdout and stderr, and its folder as a detached read-only mount (`open_tree`). The
 //! supervisor clones a fresh **match init** into new PID, mount and IPC namespaces,
 //! which mounts a fresh `/proc` (this match's processes only), a fresh scratch tmpfs
-//! (`/sandbox`: `tmp/` and `work/`, with a link per entry of the bot's folder), attaches
-//! the bot's folder at `/run/mazearena/bot`, then puts up the jail's walls on itself
-//! ([`super::jail::walls`]: uid, limits, `no_new_privs`, Landlock, seccomp) and only then
-//! starts the bot's program, which inherits them all. When the bot's process ends, the
+//! (`/sandbox`: `tmp/` and `work/`), attaches the bot's folder at `/run/mazearena/bot`,
+//! then puts up the jail's walls on itself ([`super::jail::walls`]: uid, limits,
+//! `no_new_privs`, Landlock, seccomp), links each entry of the folder in `work/`, and only
+//! then starts the bot's program, which inherits every wall. When the bot's process ends, the
 //! init ends, and the kernel kills whatever is left in its PID namespace; the
 //! mount and IPC namespaces, with the scratch area and every IPC object, go with the
 //! last process. Nothing of a match is left for the next one: not a process, a file, an
@@ -37,9 +37,6 @@ pub const REQUEST_FDS: usize = 4;
 pub struct Request {
     /// The size of the match's scratch tmpfs, in bytes.
     pub scratch_bytes: u64,
-    /// The names of the bot folder's top-level entries: each gets a link in the working
-    /// directory to its place in the folder.
-    pub entries: Vec<Vec<u8>>,
     /// The jail step's arguments ([`jail::JailArgs::to_args`]).
     pub jail: Vec<String>,
 }
@@ -153,7 +150,6 @@ pub fn serve() -> Result<(), String> {
             .and_then(|r| {
                 let args: Vec<OsString> = r.jail.iter().map(OsString::from).collect();
                 let jail = jail::JailArgs::parse(&args)?;
-                check_entries(&r.entries)?;
                 let fds: [OwnedFd; REQUEST_FDS] = fds
                     .try_into()
                     .map_err(|_| format!("a request needs {REQUEST_FDS} descriptors"))?;
@@ -175,16 +171,6 @@ pub fn serve() -> Result<(), String> {
             }
         }
     }
-}
-
-/// Each entry is one plain name: not empty, no `/`, not `.` or `..`.
-fn check_entries(entries: &[Vec<u8>]) -> Result<(), String> {
-    for e in entries {
-        if e.is_empty() || e.contains(&b'/') || e == b"." || e == b".." || e.contains(&0) {
-            return Err(format!("a bad entry name {:?}", String::from_utf8_lossy(e)));
-        }
-    }
-    Ok(())
 }
 
 /// Waits for the match's init to end; when the runner closes the socket meanwhile (it
@@ -336,6 +322,10 @@ fn match_init(
     if let Err(e) = jail::walls(jail, filters) {
         return fail(e);
     }
+    // The bot's file names are read, and linked, only behind the walls.
+    if let Err(e) = link_bot_files() {
+        return fail(e);
+    }
     let dup = |fd: &OwnedFd| fd.try_clone().map(std::process::Stdio::from);
     let stdio = (dup(&stdin), dup(&stdout), dup(&stderr));
     let (Ok(i), Ok(o), Ok(e)) = stdio else {
@@ -407,7 +397,7 @@ fn say(fd: &OwnedFd, text: &str) {
 
 /// The match's own world, made in its fresh mount namespace: `/proc` of its PID
 /// namespace (with the parts the one-shot view has read-only kept read-only), the
-/// scratch tmpfs with `tmp/` (1777) and `work/` (0777) and a link per entry, and the
+/// scratch tmpfs with `tmp/` (1777) and `work/` (0777), and the
 /// bot's folder attached read-only.
 fn prepare(request: &Request, tree: &OwnedFd) -> Result<(), String> {
     use nix::mount::{MsFlags, mount};
@@ -445,16 +435,20 @@ fn prepare(request: &Request, tree: &OwnedFd) -> Result<(), String> {
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode))
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
-    use std::os::unix::ffi::OsStrExt;
-    for name in &request.entries {
-        let name = std::ffi::OsStr::from_bytes(name);
-        std::os::unix::fs::symlink(
-            Path::new(BOT_FILES).join(name),
-            scratch.join("work").join(name),
-        )
-        .map_err(|e| format!("a link to the bot's file {name:?}: {e}"))?;
-    }
     attach(tree, BOT_FILES).map_err(|e| format!("attaching the bot's folder: {e}"))?;
+    Ok(())
+}
+
+/// A link in the working directory to each entry of the bot's folder, made by the
+/// match's init once its walls are up (as the match's uid, inside Landlock).
+fn link_bot_files() -> Result<(), String> {
+    let work = Path::new(SCRATCH).join("work");
+    let entries = std::fs::read_dir(BOT_FILES).map_err(|e| format!("{BOT_FILES}: {e}"))?;
+    for entry in entries {
+        let name = entry.map_err(|e| format!("{BOT_FILES}: {e}"))?.file_name();
+        std::os::unix::fs::symlink(Path::new(BOT_FILES).join(&name), work.join(&name))
+            .map_err(|e| format!("a link to the bot's file {name:?}: {e}"))?;
+    }
     Ok(())
 }
 
@@ -510,14 +504,6 @@ fn attach(tree: &OwnedFd, at: &str) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn entry_names_are_plain_names() {
-        assert!(check_entries(&[b"bot.py".to_vec(), b".hidden".to_vec()]).is_ok());
-        for bad in [&b""[..], b".", b"..", b"a/b", b"/etc", b"a\0b"] {
-            assert!(check_entries(&[bad.to_vec()]).is_err(), "{bad:?}");
-        }
-    }
 
     #[test]
     fn messages_and_descriptors_cross_a_seqpacket_socket() {

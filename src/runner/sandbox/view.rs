@@ -378,27 +378,23 @@ pub fn describe(runtimes: &[Runtime]) -> Vec<(String, String)> {
     out
 }
 
-/// The names of the entries of `dir`, when a match's view can show it as one mount with
-/// a link per entry (see [`bwrap_args`]): the match's uid (`own_uid`) may pass through
-/// it, and no entry is itself a link. `None` otherwise.
+/// Whether a match's view can show folder `dir` as one mount with a link per entry (see
+/// [`bwrap_args`]): the match's uid (`own_uid`) may pass through it, and no entry is
+/// itself a link.
 ///
 /// # Errors
 /// The folder cannot be read.
-pub fn linkable_entries(dir: &Path, own_uid: bool) -> std::io::Result<Option<Vec<OsString>>> {
+pub fn linkable(dir: &Path, own_uid: bool) -> std::io::Result<bool> {
     use std::os::unix::fs::PermissionsExt;
     if own_uid && std::fs::metadata(dir)?.permissions().mode() & 0o001 == 0 {
-        return Ok(None);
+        return Ok(false);
     }
-    let mut names = Vec::new();
     for entry in std::fs::read_dir(dir)? {
-        let entry = entry?;
-        if entry.file_type()?.is_symlink() {
-            return Ok(None);
+        if entry?.file_type()?.is_symlink() {
+            return Ok(false);
         }
-        names.push(entry.file_name());
     }
-    names.sort();
-    Ok(Some(names))
+    Ok(true)
 }
 
 /// Whether a runtime's mount point lies in the scratch area (a runtime under `/tmp`),

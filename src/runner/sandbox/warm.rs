@@ -103,11 +103,6 @@ impl WarmPool {
         };
         drop(evicted);
     }
-
-    /// How many sandboxes are idle.
-    pub fn idle(&self) -> usize {
-        self.idle.lock().map_or(0, |i| i.len())
-    }
 }
 
 /// One warm sandbox: bubblewrap running the supervisor, its socket and its cgroup.
@@ -118,8 +113,8 @@ pub struct WarmSandbox {
     /// The runner's end of the supervisor's socket (non-blocking).
     control: OwnedFd,
     cgroup: MatchCgroup,
-    /// Threads in the cgroup with no match: the sandbox's own.
-    own_threads: usize,
+    /// The threads in the cgroup with no match (the sandbox's own), sorted.
+    own_threads: Vec<i32>,
     /// The last match's end was not read yet.
     awaiting_end: bool,
 }
@@ -165,7 +160,7 @@ impl WarmSandbox {
             child,
             control: ours,
             cgroup,
-            own_threads: 0,
+            own_threads: Vec::new(),
             awaiting_end: false,
         };
         match sandbox.answer() {
@@ -176,7 +171,8 @@ impl WarmSandbox {
                 return Err(format!("the warm sandbox did not start ({status:?}): {e}"));
             }
         }
-        sandbox.own_threads = sandbox.cgroup.threads().len();
+        sandbox.own_threads = sandbox.cgroup.threads();
+        sandbox.own_threads.sort_unstable();
         Ok(sandbox)
     }
 
@@ -201,7 +197,7 @@ impl WarmSandbox {
     }
 
     /// Whether the sandbox may take the next match: the last one's end is read, the
-    /// sandbox is alive, and no process of the last match is left in its cgroup.
+    /// sandbox is alive, and its cgroup holds its own threads and nothing else.
     fn ready(&mut self) -> bool {
         if self.awaiting_end {
             match self.answer() {
@@ -213,13 +209,17 @@ impl WarmSandbox {
             return false;
         }
         let until = Instant::now() + LEAVE_WAIT;
-        while self.cgroup.threads().len() > self.own_threads {
+        loop {
+            let mut now = self.cgroup.threads();
+            now.sort_unstable();
+            if now == self.own_threads {
+                return true;
+            }
             if Instant::now() > until {
                 return false;
             }
             std::thread::sleep(Duration::from_millis(1));
         }
-        true
     }
 }
 
@@ -478,22 +478,30 @@ fn detached_read_only(dir: &Path) -> std::io::Result<OwnedFd> {
     Ok(tree)
 }
 
-/// Whether a match may use a warm sandbox of `full` (see the module's documentation),
-/// and then the names of its bot folder's entries.
+/// Why this machine's runners cannot keep warm sandboxes, if they cannot: each match
+/// needs a uid of its own (`as_root`) and a cgroup (`cgroups`) for its limits.
+pub fn unavailable(as_root: bool, cgroups: bool) -> Option<&'static str> {
+    if !as_root {
+        Some("not root (each match needs a uid of its own)")
+    } else if !cgroups {
+        Some("no cgroups (limits must hold for the match alone)")
+    } else {
+        None
+    }
+}
+
+/// Whether a match may use a warm sandbox of `full` (see the module's documentation).
 ///
 /// # Errors
 /// The bot's folder cannot be read.
-pub fn plan(
-    full: &FullSandbox,
-    bot_dir: &Path,
-    runtimes: &[Runtime],
-) -> std::io::Result<Option<Vec<std::ffi::OsString>>> {
-    if !(full.reuse && full.as_root && full.cgroups.is_ok())
+pub fn plan(full: &FullSandbox, bot_dir: &Path, runtimes: &[Runtime]) -> std::io::Result<bool> {
+    if !full.reuse
+        || unavailable(full.as_root, full.cgroups.is_ok()).is_some()
         || runtimes.iter().any(view::in_scratch)
     {
-        return Ok(None);
+        return Ok(false);
     }
-    view::linkable_entries(bot_dir, true)
+    view::linkable(bot_dir, true)
 }
 
 #[cfg(test)]
@@ -532,23 +540,22 @@ mod tests {
         std::fs::write(dir.join("a.py"), "").unwrap();
         let plan_of =
             |full: &FullSandbox, runtimes: &[Runtime]| plan(full, &dir, runtimes).unwrap();
-        let names = plan_of(&sandbox(true, true, true), &[]);
-        assert_eq!(names, Some(vec!["a.py".into(), "b.py".into()]));
+        assert!(plan_of(&sandbox(true, true, true), &[]));
         // A runner of one match, not root, or without cgroups: a one-shot sandbox.
-        assert_eq!(plan_of(&sandbox(false, true, true), &[]), None);
-        assert_eq!(plan_of(&sandbox(true, false, true), &[]), None);
-        assert_eq!(plan_of(&sandbox(true, true, false), &[]), None);
+        assert!(!plan_of(&sandbox(false, true, true), &[]));
+        assert!(!plan_of(&sandbox(true, false, true), &[]));
+        assert!(!plan_of(&sandbox(true, true, false), &[]));
         // A runtime under /tmp lives in the scratch area, made anew for each match.
         let in_tmp = Runtime {
             prefix: "/tmp/venv".into(),
             why: "test".into(),
         };
-        assert_eq!(plan_of(&sandbox(true, true, true), &[in_tmp]), None);
+        assert!(!plan_of(&sandbox(true, true, true), &[in_tmp]));
         // An entry that is a link, and a folder the match's uid cannot pass through.
         std::os::unix::fs::symlink("a.py", dir.join("c.py")).unwrap();
-        assert_eq!(plan_of(&sandbox(true, true, true), &[]), None);
+        assert!(!plan_of(&sandbox(true, true, true), &[]));
         std::fs::remove_file(dir.join("c.py")).unwrap();
         std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).unwrap();
-        assert_eq!(plan_of(&sandbox(true, true, true), &[]), None);
+        assert!(!plan_of(&sandbox(true, true, true), &[]));
     }
 }
