@@ -217,6 +217,10 @@ async fn play(
     let tracker = TaskTracker::new();
     let shutdown = Shutdown::default();
     let progress = bar.clone();
+    // Each recorded match wakes the loop below, which ends the pool once all are done
+    // (without it the pool's end waited for the loop's next look, up to 200 ms).
+    let recorded = Arc::new(Notify::new());
+    let on_record = recorded.clone();
     worker::spawn_workers(
         &tracker,
         storage.clone(),
@@ -238,7 +242,10 @@ async fn play(
         None,
         Arc::new(Notify::new()),
         shutdown.clone(),
-        Some(Arc::new(move |_| progress.inc(1))),
+        Some(Arc::new(move |_| {
+            progress.inc(1);
+            on_record.notify_one();
+        })),
     );
     tracker.close();
     let abort = shutdown.clone();
@@ -253,12 +260,15 @@ async fn play(
     loop {
         tokio::select! {
             _ = &mut workers_done => break,
-            _ = tokio::time::sleep(Duration::from_millis(200)) => {
-                let done = storage.get_tournament(t.tournament_id).await?.map_or(0, |t| t.done);
-                if done >= t.total {
-                    shutdown.stop_claiming.cancel();
-                }
-            }
+            () = recorded.notified() => {}
+            _ = tokio::time::sleep(Duration::from_millis(200)) => {}
+        }
+        let done = storage
+            .get_tournament(t.tournament_id)
+            .await?
+            .map_or(0, |t| t.done);
+        if done >= t.total {
+            shutdown.stop_claiming.cancel();
         }
     }
     interrupted.abort();
