@@ -267,6 +267,20 @@ fn spinning_children_are_counted_in_the_cpu_time_and_die_with_the_match() {
 }
 
 #[test]
+fn a_bot_cannot_make_the_refused_system_calls_nor_reach_them_through_the_x32_abi() {
+    let Some(_) = full_sandbox("hostile syscalls") else {
+        return;
+    };
+    // Twelve calls by their own numbers and three through the x32 ABI, each answered by
+    // the filter (the fixture reports a LEAK for any other answer).
+    let calls = if cfg!(target_arch = "x86_64") { 15 } else { 0 };
+    for r in attack("syscalls.py", &[], &[]) {
+        assert_eq!(r["status"], "step_limit", "{r}");
+        contained(&r, calls);
+    }
+}
+
+#[test]
 fn a_bot_cannot_leave_the_core_of_its_match() {
     let Some(_) = full_sandbox("hostile core") else {
         return;

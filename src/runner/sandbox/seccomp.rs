@@ -84,6 +84,9 @@ fn arch() -> Result<seccompiler::TargetArch, FilterError> {
 
 /// The filters to install, in order: the deny list (`EPERM`), and `clone3` answered with
 /// `ENOSYS` so that C libraries fall back to `clone`, whose flags the first filter sees.
+/// On x86_64 the second filter also refuses (`EPERM`) every system call made through the
+/// x32 ABI (numbers with [`X32_SYSCALL_BIT`]): the deny list compares numbers, and on a
+/// kernel with x32 enabled the same calls have other numbers there.
 ///
 /// # Errors
 /// [`FilterError`] on an architecture seccompiler does not know.
@@ -111,17 +114,79 @@ pub fn filters() -> Result<Vec<BpfProgram>, FilterError> {
         arch()?,
     )
     .map_err(|e| FilterError(e.to_string()))?;
-    let clone3 = SeccompFilter::new(
-        [(libc::SYS_clone3, Vec::new())].into_iter().collect(),
-        SeccompAction::Allow,
-        SeccompAction::Errno(libc::ENOSYS as u32),
-        arch()?,
-    )
-    .map_err(|e| FilterError(e.to_string()))?;
-    [deny, clone3]
-        .into_iter()
-        .map(|f| BpfProgram::try_from(f).map_err(|e| FilterError(e.to_string())))
-        .collect()
+    let deny = BpfProgram::try_from(deny).map_err(|e| FilterError(e.to_string()))?;
+    let second = if cfg!(target_arch = "x86_64") {
+        x86_64_abi_and_clone3()
+    } else {
+        let clone3 = SeccompFilter::new(
+            [(libc::SYS_clone3, Vec::new())].into_iter().collect(),
+            SeccompAction::Allow,
+            SeccompAction::Errno(libc::ENOSYS as u32),
+            arch()?,
+        )
+        .map_err(|e| FilterError(e.to_string()))?;
+        BpfProgram::try_from(clone3).map_err(|e| FilterError(e.to_string()))?
+    };
+    Ok(vec![deny, second])
+}
+
+/// The bit that marks a system call number of the x32 ABI on x86_64.
+pub const X32_SYSCALL_BIT: u32 = 0x4000_0000;
+
+/// `AUDIT_ARCH_X86_64` (linux/audit.h): `EM_X86_64`, 64-bit, little-endian.
+const AUDIT_ARCH_X86_64: u32 = 62 | 0x8000_0000 | 0x4000_0000;
+
+/// The second filter on x86_64, written out (nine instructions; seccompiler has no rule for
+/// a range of numbers): another architecture is killed (as the deny list does), a number
+/// of the x32 ABI is refused with `EPERM`, `clone3` is answered `ENOSYS`, and the rest is
+/// allowed.
+fn x86_64_abi_and_clone3() -> BpfProgram {
+    let stmt = |code: u32, k: u32| seccompiler::sock_filter {
+        code: code as u16,
+        jt: 0,
+        jf: 0,
+        k,
+    };
+    let jump = |code: u32, k: u32, jt: u8, jf: u8| seccompiler::sock_filter {
+        code: code as u16,
+        jt,
+        jf,
+        k,
+    };
+    // Offsets in `struct seccomp_data`: the number, then the architecture.
+    let (nr, arch) = (0, 4);
+    vec![
+        stmt(libc::BPF_LD | libc::BPF_W | libc::BPF_ABS, arch),
+        jump(
+            libc::BPF_JMP | libc::BPF_JEQ | libc::BPF_K,
+            AUDIT_ARCH_X86_64,
+            1,
+            0,
+        ),
+        stmt(libc::BPF_RET | libc::BPF_K, libc::SECCOMP_RET_KILL_PROCESS),
+        stmt(libc::BPF_LD | libc::BPF_W | libc::BPF_ABS, nr),
+        jump(
+            libc::BPF_JMP | libc::BPF_JGE | libc::BPF_K,
+            X32_SYSCALL_BIT,
+            0,
+            1,
+        ),
+        stmt(
+            libc::BPF_RET | libc::BPF_K,
+            libc::SECCOMP_RET_ERRNO | libc::EPERM as u32,
+        ),
+        jump(
+            libc::BPF_JMP | libc::BPF_JEQ | libc::BPF_K,
+            libc::SYS_clone3 as u32,
+            0,
+            1,
+        ),
+        stmt(
+            libc::BPF_RET | libc::BPF_K,
+            libc::SECCOMP_RET_ERRNO | libc::ENOSYS as u32,
+        ),
+        stmt(libc::BPF_RET | libc::BPF_K, libc::SECCOMP_RET_ALLOW),
+    ]
 }
 
 #[cfg(test)]
@@ -133,5 +198,61 @@ mod tests {
         let filters = filters().unwrap();
         assert_eq!(filters.len(), 2);
         assert!(filters.iter().all(|f| !f.is_empty()));
+    }
+
+    /// Runs a filter made of absolute loads, `jeq`/`jge` against constants and returns, as
+    /// the kernel would for (`arch`, `nr`).
+    fn verdict(program: &[seccompiler::sock_filter], arch: u32, nr: u32) -> u32 {
+        let mut pc = 0;
+        let mut a = 0u32;
+        loop {
+            let i = &program[pc];
+            let code = u32::from(i.code);
+            if code == libc::BPF_LD | libc::BPF_W | libc::BPF_ABS {
+                a = match i.k {
+                    0 => nr,
+                    4 => arch,
+                    k => panic!("a load of offset {k}"),
+                };
+                pc += 1;
+            } else if code == libc::BPF_RET | libc::BPF_K {
+                return i.k;
+            } else {
+                let taken = match code {
+                    c if c == libc::BPF_JMP | libc::BPF_JEQ | libc::BPF_K => a == i.k,
+                    c if c == libc::BPF_JMP | libc::BPF_JGE | libc::BPF_K => a >= i.k,
+                    c => panic!("instruction {c:#x}"),
+                };
+                pc += 1 + usize::from(if taken { i.jt } else { i.jf });
+            }
+        }
+    }
+
+    #[test]
+    fn the_second_filter_refuses_the_x32_abi_and_answers_clone3_enosys() {
+        let p = x86_64_abi_and_clone3();
+        let errno = |e: i32| libc::SECCOMP_RET_ERRNO | e as u32;
+        let x86 = AUDIT_ARCH_X86_64;
+        assert_eq!(
+            verdict(&p, x86, libc::SYS_read as u32),
+            libc::SECCOMP_RET_ALLOW
+        );
+        assert_eq!(
+            verdict(&p, x86, libc::SYS_clone as u32),
+            libc::SECCOMP_RET_ALLOW
+        );
+        assert_eq!(
+            verdict(&p, x86, libc::SYS_clone3 as u32),
+            errno(libc::ENOSYS)
+        );
+        for nr in [39, 272, 435, 0x3fff_ffff] {
+            assert_eq!(
+                verdict(&p, x86, X32_SYSCALL_BIT | nr),
+                errno(libc::EPERM),
+                "{nr}"
+            );
+        }
+        assert_eq!(verdict(&p, x86, 0x3fff_ffff), libc::SECCOMP_RET_ALLOW);
+        assert_eq!(verdict(&p, 0x4000_0003, 39), libc::SECCOMP_RET_KILL_PROCESS);
     }
 }
