@@ -135,8 +135,12 @@ pub fn serve() -> Result<(), String> {
     if std::fs::read_dir("/proc/self/task").map_or(0, Iterator::count) != 1 {
         return Err("the supervisor must have one thread (it clones)".into());
     }
-    // Compiled once: every match's init applies the same filters.
-    let filters = super::seccomp::filters().map_err(|e| format!("seccomp: {e}"))?;
+    // The part of the seccomp deny list that nothing here needs goes on this process
+    // now, before any request: every match's init, and its bot, inherits it. The rest
+    // (mounts, namespaces), compiled once, goes on each init behind its other walls.
+    let own = super::seccomp::helper_filter().map_err(|e| format!("seccomp: {e}"))?;
+    seccompiler::apply_filter(&own).map_err(|e| format!("seccomp: {e}"))?;
+    let filters = super::seccomp::match_filters().map_err(|e| format!("seccomp: {e}"))?;
     reply(control, &Reply::Ready, &[]).map_err(|e| format!("cannot answer: {e}"))?;
     let mut buf = vec![0u8; MAX_MESSAGE];
     loop {
