@@ -20,11 +20,15 @@
 #                  written to answer read), the rest of a step being the referee's own
 #                  work.
 #
+# With BASELINE=path/to/an/earlier/mazearena, the same two matches are also played by
+# that binary, in turn with this one, in both kinds of sandbox (rows marked "baseline").
+#
 #   bash benches/step_latency.sh [RUNS]      (default 11; needs gcc and bubblewrap)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-11}
 IDLE=900
+BASELINE=${BASELINE:-}
 cargo build --release --locked --quiet
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -38,10 +42,10 @@ import json, sys
 path = [json.dumps(a, separators=(",", ":")) for a in json.load(sys.stdin)["actions"]]
 print("\n".join(path + ["{\"reset\":true}"] + path))' >"$tmp/bot/script.txt"
 
-run_match() { # $1: sandbox, $2: idle steps; prints "whole_us exchange_us steps bot_clock_us"
+run_match() { # $1: sandbox, $2: idle steps, $3: binary; prints "whole_us exchange_us steps bot_clock_us"
   local a b
   a=$(date +%s%N)
-  ./target/release/mazearena run --maze "$maze" --bot "./trivial_bot script.txt $2" \
+  "$3" run --maze "$maze" --bot "./trivial_bot script.txt $2" \
     --bot-dir "$tmp/bot" --sandbox "$1" --replay "$tmp/r.json" --json >/dev/null 2>&1
   b=$(date +%s%N)
   python3 - "$tmp/r.json" $(( (b - a) / 1000 )) "$2" <<'PY'
@@ -62,17 +66,21 @@ for i in $(seq "$RUNS"); do
   echo "same $("$tmp/pingpong" same)"
   echo "split $("$tmp/pingpong" split)"
   for s in none full; do
-    # The short and the long run in turn, first one then the other, so that whatever
-    # one run leaves the next (the kernel's clean-up of a sandbox) falls on both.
-    if [ $((i % 2)) = 1 ]; then
-      read -r short _ n0 _ < <(run_match "$s" 0)
-      read -r long exchange n1 inside < <(run_match "$s" "$IDLE")
-    else
-      read -r long exchange n1 inside < <(run_match "$s" "$IDLE")
-      read -r short _ n0 _ < <(run_match "$s" 0)
-    fi
-    [ $((n1 - n0)) = "$IDLE" ] || { echo "expected $IDLE more steps: $n0, $n1" >&2; exit 1; }
-    echo "$s $short $long $exchange $inside"
+    for bin in ./target/release/mazearena $BASELINE; do
+      key=$s
+      [ "$bin" = ./target/release/mazearena ] || key=base-$s
+      # The short and the long run in turn, first one then the other, so that whatever
+      # one run leaves the next (the kernel's clean-up of a sandbox) falls on both.
+      if [ $((i % 2)) = 1 ]; then
+        read -r short _ n0 _ < <(run_match "$s" 0 "$bin")
+        read -r long exchange n1 inside < <(run_match "$s" "$IDLE" "$bin")
+      else
+        read -r long exchange n1 inside < <(run_match "$s" "$IDLE" "$bin")
+        read -r short _ n0 _ < <(run_match "$s" 0 "$bin")
+      fi
+      [ $((n1 - n0)) = "$IDLE" ] || { echo "expected $IDLE more steps: $n0, $n1" >&2; exit 1; }
+      echo "$key $short $long $exchange $inside"
+    done
   done
 done >"$tmp/all.txt"
 
@@ -91,7 +99,11 @@ print("|---|---:|---:|")
 print(f"| pipe round trip, one core (the floor) | {floor:.1f} | 1.00 |")
 split = med("split", lambda r: r[0])
 print(f"| pipe round trip, two cores | {split:.1f} | {split / floor:.2f} |")
-for k, name in (("none", "--sandbox none"), ("full", "--sandbox full")):
+kinds = [("none", "--sandbox none"), ("full", "--sandbox full")]
+if "base-none" in rows:
+    kinds += [("base-none", "--sandbox none, the baseline binary"),
+              ("base-full", "--sandbox full, the baseline binary")]
+for k, name in kinds:
     step = med(k, lambda r: (r[1] - r[0]) / idle)
     inside = med(k, lambda r: r[3])
     exchange = med(k, lambda r: r[2])

@@ -71,47 +71,54 @@ fn run_json(maze: &str, bot: &str, dir: &Path) -> Value {
     ])
 }
 
+/// Builds `kit`'s minimal bot where it is (in `dir`, the kit's folder) as its README
+/// says; returns the command that runs it. Hold [`crate::support::kits_in_place`].
+fn build_in_place(kit: &str, dir: &Path) -> String {
+    match kit {
+        "python" => "python3 simple_bot.py".to_string(),
+        "javascript" => "node minimal_bot.js".to_string(),
+        "rust" => {
+            build(dir, &["cargo", "build", "--release", "--quiet"]);
+            dir.join("target/release/minimal_bot").display().to_string()
+        }
+        "c" | "cpp" => {
+            build(dir, &["make", "-s"]);
+            dir.join("minimal_bot").display().to_string()
+        }
+        "go" => {
+            build(dir, &["go", "vet", "./..."]);
+            build(dir, &["go", "test", "-count=1", "./..."]);
+            build(
+                &dir,
+                &[
+                    "go",
+                    "build",
+                    "-buildvcs=false",
+                    "-o",
+                    "minimal_bot",
+                    "./cmd/minimal_bot",
+                ],
+            );
+            dir.join("minimal_bot").display().to_string()
+        }
+        "java" => {
+            let manifest = mazearena::manifest::load(&dir).expect("the java kit's bot.toml");
+            let words = shlex::split(manifest[0].build.as_deref().unwrap()).unwrap();
+            let words: Vec<&str> = words.iter().map(String::as_str).collect();
+            build(dir, &words);
+            manifest[0].command.clone()
+        }
+        other => unreachable!("unknown kit {other}"),
+    }
+}
+
 #[test]
 fn each_starter_kits_minimal_bot_finishes_a_real_match() {
+    let _kits = crate::support::kits_in_place();
     let maze = shared_maze("classic/test_maze_02.txt");
     for kit in available_kits() {
         let dir = root().join("bots").join(kit);
-        let bot = match kit {
-            "python" => "python3 simple_bot.py".to_string(),
-            "javascript" => "node minimal_bot.js".to_string(),
-            "rust" => {
-                build(&dir, &["cargo", "build", "--release", "--quiet"]);
-                dir.join("target/release/minimal_bot").display().to_string()
-            }
-            "c" | "cpp" => {
-                build(&dir, &["make", "-s"]);
-                dir.join("minimal_bot").display().to_string()
-            }
-            "go" => {
-                build(&dir, &["go", "vet", "./..."]);
-                build(&dir, &["go", "test", "-count=1", "./..."]);
-                build(
-                    &dir,
-                    &[
-                        "go",
-                        "build",
-                        "-buildvcs=false",
-                        "-o",
-                        "minimal_bot",
-                        "./cmd/minimal_bot",
-                    ],
-                );
-                dir.join("minimal_bot").display().to_string()
-            }
-            "java" => {
-                let manifest = mazearena::manifest::load(&dir).expect("the java kit's bot.toml");
-                let words = shlex::split(manifest[0].build.as_deref().unwrap()).unwrap();
-                let words: Vec<&str> = words.iter().map(String::as_str).collect();
-                build(&dir, &words);
-                manifest[0].command.clone()
-            }
-            other => unreachable!("unknown kit {other}"),
-        };
+        let bot = build_in_place(kit, &dir);
         let v = run_json(maze.to_str().unwrap(), &bot, &dir);
         assert_eq!(v["status"], "finished", "{kit}: {v}");
         assert!(
@@ -123,6 +130,7 @@ fn each_starter_kits_minimal_bot_finishes_a_real_match() {
 
 #[test]
 fn every_manifest_finishes_the_classic_mazes_in_a_tournament() {
+    let _kits = crate::support::kits_in_place();
     let _heavy = crate::support::heavy();
     let dir = tempfile::tempdir().unwrap();
     let db = format!("sqlite://{}", dir.path().join("bots.db").display());
@@ -275,14 +283,11 @@ fn the_rust_kits_tests_pass_and_the_champion_study_plays_like_the_referee() {
 #[test]
 fn no_bot_crashes_on_a_maze_whose_goal_cannot_be_reached() {
     let maze = shared_maze("micromouseonline/classic/001-anomaly-test.txt");
+    let _kits = crate::support::kits_in_place();
     let mut played = 0;
     for kit in available_kits() {
         let dir = root().join("bots").join(kit);
-        match kit {
-            "rust" => build(&dir, &["cargo", "build", "--release", "--quiet"]),
-            "c" => build(&dir, &["make", "-s"]),
-            _ => {}
-        }
+        build_in_place(kit, &dir);
         for bot in mazearena::manifest::load(&dir).unwrap() {
             let v = run_json(maze.to_str().unwrap(), &bot.command, &bot.dir);
             assert_eq!(v["status"], "step_limit", "{}: {v}", bot.name);

@@ -200,6 +200,25 @@ async fn get(client: &reqwest::Client, base: &str, path: &str) -> Option<Value> 
     resp.json().await.ok()
 }
 
+/// Waits until at least `at` matches of tournament `id` are done, as the server at
+/// `base` says (while it is down, until it answers again).
+async fn wait_done(client: &reqwest::Client, base: &str, id: i64, at: u64) {
+    let deadline = Instant::now() + Duration::from_secs(300);
+    loop {
+        let v = get(client, base, &format!("/api/tournaments/{id}")).await;
+        if v.and_then(|v| v["done"].as_u64())
+            .is_some_and(|done| done >= at)
+        {
+            return;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "tournament {id} did not reach {at} matches done"
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
 /// Waits until the server at `base` answers `/healthz`.
 async fn wait_healthy(client: &reqwest::Client, base: &str) {
     let deadline = Instant::now() + Duration::from_secs(30);
@@ -347,8 +366,17 @@ async fn play_under_fire(
     let id = create_tournament(client, base).await;
     let mut rng = Lcg(seed);
     eprintln!("kill schedule seed {seed}");
-    for k in 0..KILLS {
-        tokio::time::sleep(Duration::from_millis(1000 + rng.below(1500))).await;
+    let total = (2 * 9 * REPEATS) as u64;
+    for k in 0..KILLS as u64 {
+        // Kill k comes once about (k + 1) / (KILLS + 4) of the matches are done (give or
+        // take a random part of a share), then after a random pause: every kill lands
+        // while the tournament plays, however fast this machine plays it (the last one
+        // with some 140 matches to go).
+        let share = total / (KILLS as u64 + 4);
+        let at = (k + 1) * share - share / 2 + rng.below(share);
+        wait_done(client, base, id, at).await;
+        tokio::time::sleep(Duration::from_millis(rng.below(500))).await;
+        let k = k as usize;
         // Each process once (in an order the seed gives), then any.
         let n = procs.len();
         let target = if k < n {

@@ -19,6 +19,15 @@ pub fn heavy() -> std::sync::MutexGuard<'static, ()> {
         .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
+/// Held by each test that builds the starter kits in bots/ where they are (`make`,
+/// `go build`, a tournament's builds): two builds of one kit at once would link a bot
+/// while the other test starts it (`Text file busy`).
+pub fn kits_in_place() -> std::sync::MutexGuard<'static, ()> {
+    static KITS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    KITS.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// The crate root.
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
