@@ -89,7 +89,7 @@ fn build_in_place(kit: &str, dir: &Path) -> String {
             build(dir, &["go", "vet", "./..."]);
             build(dir, &["go", "test", "-count=1", "./..."]);
             build(
-                &dir,
+                dir,
                 &[
                     "go",
                     "build",
@@ -102,7 +102,7 @@ fn build_in_place(kit: &str, dir: &Path) -> String {
             dir.join("minimal_bot").display().to_string()
         }
         "java" => {
-            let manifest = mazearena::manifest::load(&dir).expect("the java kit's bot.toml");
+            let manifest = mazearena::manifest::load(dir).expect("the java kit's bot.toml");
             let words = shlex::split(manifest[0].build.as_deref().unwrap()).unwrap();
             let words: Vec<&str> = words.iter().map(String::as_str).collect();
             build(dir, &words);
