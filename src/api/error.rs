@@ -173,6 +173,13 @@ impl From<RegistryError> for ApiError {
             RegistryError::Bundle(e) if e.is_client_error() => {
                 ApiError::Unprocessable(e.to_string())
             }
+            RegistryError::Quota {
+                message,
+                retry_after_secs,
+            } => ApiError::TooManyRequests {
+                message,
+                retry_after_secs,
+            },
             RegistryError::Storage(e) => e.into(),
             e @ (RegistryError::Bundle(_)
             | RegistryError::Corrupt(_)

@@ -21,7 +21,7 @@ use super::lists::{MatchListQuery, MatchPage, next_before};
 use super::mazes::{find_maze, hidden_error};
 use crate::runner::MatchRecord;
 use crate::storage::bots::build_status;
-use crate::storage::matches::MatchRow;
+use crate::storage::matches::{MatchRow, QueueLimits, QueueRefusal};
 use crate::storage::mazes::MazeRow;
 use crate::web::viewer::ViewerData;
 
@@ -226,26 +226,45 @@ async fn create_match(
             }
         }
         let waiting = state.storage.queued_for_owner_of(bot.bot_id).await?;
-        let limit = state.settings.max_queued_per_owner;
-        if waiting >= limit {
-            return Err(ApiError::TooManyRequests {
-                message: format!(
-                    "the owner of bot {} has {waiting} matches waiting, its limit ({limit}); \
-                     queue more once some have been played",
-                    bot.bot_id
-                ),
-                retry_after_secs: RETRY_AFTER_SECS,
-            });
+        if waiting >= state.settings.max_queued_per_owner {
+            return Err(owner_queue_full(bot.bot_id, waiting, &state));
         }
     }
     let seed = match body.seed {
         Some(s) => s,
         None => random_seed()?,
     };
-    let match_id = state
+    // The quotas and the owner's limit counted again where the match is queued:
+    // requests sent at once all pass the checks above before any is queued.
+    let limits = QueueLimits {
+        bot_id: bot.bot_id,
+        most_queued: (!caller.is_admin()).then_some(state.settings.max_queued_per_owner),
+        practice: crate::registry::competitions::practice_quotas(
+            &state.storage,
+            bot.bot_id,
+            maze.maze_id,
+            now,
+        )
+        .await?,
+    };
+    let match_id = match state
         .storage
-        .queue_match(bot.bot_version_id, maze.maze_id, i64::from(seed))
-        .await?;
+        .queue_match_within(bot.bot_version_id, maze.maze_id, i64::from(seed), &limits)
+        .await?
+    {
+        Ok(id) => id,
+        Err(QueueRefusal::Queued(waiting)) => {
+            return Err(owner_queue_full(bot.bot_id, waiting, &state));
+        }
+        Err(QueueRefusal::Practice(q)) => {
+            let (message, quota) =
+                crate::registry::competitions::practice_refusal(&state.storage, q, now).await?;
+            return Err(ApiError::TooManyRequests {
+                message,
+                retry_after_secs: quota.retry_after_secs(now),
+            });
+        }
+    };
     state.wake.notify_waiters();
     Ok((
         StatusCode::ACCEPTED,
@@ -256,6 +275,18 @@ async fn create_match(
             seed,
         }),
     ))
+}
+
+/// The refusal of a match whose bot's owner has `waiting` matches queued, its limit.
+fn owner_queue_full(bot_id: i64, waiting: i64, state: &AppState) -> ApiError {
+    ApiError::TooManyRequests {
+        message: format!(
+            "the owner of bot {bot_id} has {waiting} matches waiting, its limit ({}); \
+             queue more once some have been played",
+            state.settings.max_queued_per_owner
+        ),
+        retry_after_secs: RETRY_AFTER_SECS,
+    }
 }
 
 /// A match: status, score, steps, warnings, limits, seed, maze hash, engine version,

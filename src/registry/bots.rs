@@ -10,7 +10,7 @@ use crate::botfiles::{BundleLimits, BundleSummary, hash_dir, skip_build_outputs}
 use crate::manifest::BotManifest;
 use crate::runner::botenv;
 use crate::storage::Storage;
-use crate::storage::bots::{BotVersionRow, NewVersion};
+use crate::storage::bots::{BotVersionRow, NewVersion, VersionQuota};
 
 /// Longest bot name.
 pub const MAX_NAME_CHARS: usize = 64;
@@ -139,6 +139,7 @@ pub async fn add_version(
     bot_id: i64,
     mut submission: Submission,
     scratch: &Path,
+    quotas: &[VersionQuota],
 ) -> Result<BotVersionRow> {
     check_submission(&submission)?;
     if storage.get_bot(bot_id).await?.is_none() {
@@ -146,9 +147,16 @@ pub async fn add_version(
     }
     let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
     let summary = store_upload(storage, files, scratch).await?;
-    Ok(storage
-        .add_bot_version(bot_id, &stored_version(&submission, &summary))
-        .await?)
+    match storage
+        .add_bot_version_within(bot_id, &stored_version(&submission, &summary), quotas)
+        .await?
+    {
+        Ok(row) => Ok(row),
+        Err(full) => {
+            let now = crate::storage::now_ms();
+            Err(super::competitions::quota_refusal(storage, full, now).await?)
+        }
+    }
 }
 
 /// Finds or registers a bot from a local folder (a `bot.toml`), which plays from that
@@ -364,7 +372,9 @@ mod tests {
             .await
             .unwrap_err();
         assert!(matches!(err, RegistryError::Conflict(_)), "{err}");
-        let err = add_version(&db, 999, ok, scratch.path()).await.unwrap_err();
+        let err = add_version(&db, 999, ok, scratch.path(), &[])
+            .await
+            .unwrap_err();
         assert!(matches!(err, RegistryError::NotFound(_)), "{err}");
     }
 }

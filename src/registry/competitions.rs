@@ -18,6 +18,7 @@ use crate::engine::mazefile;
 use crate::storage::Storage;
 use crate::storage::competitions::{BoardRow, CompetitionMaze, CompetitionRow, ResultRow};
 use crate::storage::leaderboard::Scope;
+use crate::storage::matches::PracticeQuota;
 
 /// Seeds drawn for every competition: enough for the most ranking and final repeats.
 pub const SEEDS: usize = 70;
@@ -359,6 +360,53 @@ pub async fn check_upload(
     Ok(None)
 }
 
+/// The version quotas a new version of bot `bot_id` at `now` must hold, one for each
+/// competition it is entered in: given to [`super::bots::add_version`], which counts
+/// them again in the transaction that adds the version (uploads sent at once cannot
+/// all pass [`check_upload`] and then all be added).
+///
+/// # Errors
+/// The database.
+pub async fn version_quotas(
+    storage: &Storage,
+    bot_id: i64,
+    now: i64,
+) -> Result<Vec<crate::storage::bots::VersionQuota>> {
+    let mut quotas = Vec::new();
+    for c in storage.competitions_of_bot(bot_id).await? {
+        if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
+            quotas.push(crate::storage::bots::VersionQuota {
+                competition_id: c.competition_id,
+                entrant_id,
+                limit: c.versions_per_day,
+                since: now - DAY_MS,
+            });
+        }
+    }
+    Ok(quotas)
+}
+
+/// The refusal of a version that quota `q` did not allow at `now` (found full when
+/// the version was to be added).
+///
+/// # Errors
+/// The database.
+pub async fn quota_refusal(
+    storage: &Storage,
+    q: crate::storage::bots::VersionQuota,
+    now: i64,
+) -> Result<RegistryError> {
+    let c = storage
+        .get_competition_by_id(q.competition_id)
+        .await?
+        .ok_or_else(|| RegistryError::Internal("a competition vanished".into()))?;
+    let quota = version_quota(storage, &c, q.entrant_id, now).await?;
+    Ok(RegistryError::Quota {
+        message: format!("competition {}: {}", c.name, quota.message),
+        retry_after_secs: quota.retry_after_secs(now),
+    })
+}
+
 /// Whether bot `bot_id` may play one more practice match on maze `maze_id` at `now`:
 /// the refusal (what it says, the quota) when the maze is a practice maze of a
 /// competition the bot is entered in and its entrant's practice quota there is used up.
@@ -391,6 +439,58 @@ pub async fn check_practice(
         }
     }
     Ok(None)
+}
+
+/// The practice quotas one more match of bot `bot_id` on maze `maze_id` at `now` must
+/// hold: one for each competition it is entered in whose practice maze it is. Given to
+/// [`Storage::queue_match_within`], which counts them again where the match is queued.
+///
+/// # Errors
+/// The database.
+pub async fn practice_quotas(
+    storage: &Storage,
+    bot_id: i64,
+    maze_id: i64,
+    now: i64,
+) -> Result<Vec<PracticeQuota>> {
+    let mut quotas = Vec::new();
+    for c in storage.competitions_of_bot(bot_id).await? {
+        let practice = storage
+            .competition_mazes(c.competition_id)
+            .await?
+            .iter()
+            .any(|m| m.maze_id == maze_id && m.maze_set == "practice");
+        if !practice {
+            continue;
+        }
+        if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
+            quotas.push(PracticeQuota {
+                competition_id: c.competition_id,
+                entrant_id,
+                limit: c.practice_per_day,
+                since: now - DAY_MS,
+            });
+        }
+    }
+    Ok(quotas)
+}
+
+/// What practice quota `q`, found used up when a match was to be queued, says at
+/// `now`, and the quota.
+///
+/// # Errors
+/// The database.
+pub async fn practice_refusal(
+    storage: &Storage,
+    q: PracticeQuota,
+    now: i64,
+) -> Result<(String, Quota)> {
+    let c = storage
+        .get_competition_by_id(q.competition_id)
+        .await?
+        .ok_or_else(|| RegistryError::Internal("a competition vanished".into()))?;
+    let quota = practice_quota(storage, &c, q.entrant_id, now).await?;
+    Ok((format!("competition {}: {}", c.name, quota.message), quota))
 }
 
 /// Which board.

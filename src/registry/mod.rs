@@ -51,6 +51,14 @@ pub enum RegistryError {
     /// damaged database, never the bot's doing.
     #[error("{0}")]
     Corrupt(String),
+    /// A quota is used up: what it says, and in how many seconds one more is allowed.
+    #[error("{message}")]
+    Quota {
+        /// The quota in words.
+        message: String,
+        /// When to try again.
+        retry_after_secs: u64,
+    },
     /// The database failed.
     #[error(transparent)]
     Storage(StorageError),
@@ -72,9 +80,10 @@ impl RegistryError {
     /// `true` when the caller sent something unacceptable (not a failure on our side).
     pub fn is_client_error(&self) -> bool {
         match self {
-            RegistryError::Invalid(_) | RegistryError::Conflict(_) | RegistryError::NotFound(_) => {
-                true
-            }
+            RegistryError::Invalid(_)
+            | RegistryError::Conflict(_)
+            | RegistryError::NotFound(_)
+            | RegistryError::Quota { .. } => true,
             RegistryError::Bundle(e) => e.is_client_error(),
             RegistryError::Corrupt(_) | RegistryError::Storage(_) | RegistryError::Internal(_) => {
                 false
@@ -91,7 +100,10 @@ impl RegistryError {
             | RegistryError::NotFound(_)
             | RegistryError::Corrupt(_) => true,
             RegistryError::Bundle(e) => e.is_client_error(),
-            RegistryError::Storage(_) | RegistryError::Internal(_) => false,
+            // The quota frees up with time.
+            RegistryError::Quota { .. }
+            | RegistryError::Storage(_)
+            | RegistryError::Internal(_) => false,
         }
     }
 }

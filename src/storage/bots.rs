@@ -191,6 +191,47 @@ impl Storage {
         Ok(row)
     }
 
+    /// Adds a version to bot `bot_id` as [`Storage::add_bot_version`] does, unless it
+    /// would go over one of `quotas`: then nothing is written and the quota is
+    /// returned. Each quota's entrant row is taken for the transaction first, so two
+    /// uploads of one entrant at once are counted one after the other: the second
+    /// waits for the first to commit, then counts its version.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn add_bot_version_within(
+        &self,
+        bot_id: i64,
+        new: &NewVersion<'_>,
+        quotas: &[VersionQuota],
+    ) -> Result<std::result::Result<BotVersionRow, VersionQuota>> {
+        let mut quotas = quotas.to_vec();
+        // One order for the locks, so two uploads never wait for each other.
+        quotas.sort_by_key(|q| (q.entrant_id, q.competition_id));
+        let mut tx = self.pool().begin().await?;
+        for q in &quotas {
+            sqlx::query("update entrant set created_at = created_at where entrant_id = $1")
+                .bind(q.entrant_id)
+                .execute(&mut *tx)
+                .await?;
+            let counted = Storage::count_counted_versions_in(
+                &mut tx,
+                q.competition_id,
+                q.entrant_id,
+                q.since,
+            )
+            .await?;
+            if counted >= q.limit {
+                tx.rollback().await?;
+                return Ok(Err(*q));
+            }
+        }
+        let row = insert_version(&mut tx, bot_id, new).await?;
+        resume_in(&mut tx, bot_id).await?;
+        tx.commit().await?;
+        Ok(Ok(row))
+    }
+
     /// Pauses a bot with `reason` and records its queued matches as `aborted` ("bot
     /// paused: reason"), in one transaction. Returns false if it was paused already
     /// (the first reason is kept) or does not exist.
@@ -349,6 +390,21 @@ pub(super) async fn pause_bot_in(
 }
 
 /// See [`Storage::resume_bot`]; inside the caller's transaction.
+/// A competition's version quota, held when a version is added
+/// ([`Storage::add_bot_version_within`]): at most `limit` versions of entrant
+/// `entrant_id` in competition `competition_id` uploaded after `since` that count.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VersionQuota {
+    /// The competition.
+    pub competition_id: i64,
+    /// The entrant whose versions are counted.
+    pub entrant_id: i64,
+    /// The most versions that count.
+    pub limit: i64,
+    /// Versions uploaded after this time (unix ms) count.
+    pub since: i64,
+}
+
 async fn resume_in(tx: &mut sqlx::AnyConnection, bot_id: i64) -> Result<bool> {
     let done = sqlx::query(
         "update bot set paused_reason = null, paused_at = null, resumed_at = $1

@@ -219,6 +219,23 @@ pub struct ResultRow {
     pub uncertainty: crate::ranking::Uncertainty,
 }
 
+/// The practice matches of entrant `$2` on competition `$1`'s practice mazes queued
+/// after `$3` (the `from` and `where` of a query).
+pub(crate) const PRACTICE_MATCHES: &str = "from match m join bot b on b.bot_id = m.bot_id
+     where b.entrant_id = $2 and m.tournament_id is null and m.created_at > $3
+         and m.maze_id in (select maze_id from competition_maze
+                           where competition_id = $1 and maze_set = 'practice')";
+
+/// The versions of entrant `$2` in competition `$1` uploaded after `$3` that count
+/// against its version quota: not failed to build, none of their ranking matches
+/// aborted (the `from` and `where` of a query).
+const COUNTED_VERSIONS: &str = "from bot_version v
+     join competition_entry e on e.bot_id = v.bot_id and v.bot_version_id >= e.first_version_id
+     where e.competition_id = $1 and e.entrant_id = $2 and v.created_at > $3
+         and v.build_status <> 'build_failed'
+         and not exists (select 1 from match m join tournament t on t.tournament_id = m.tournament_id
+             where t.competition_id = $1 and m.bot_version_id = v.bot_version_id and m.status = 'aborted')";
+
 impl Storage {
     /// Creates a competition whose mazes are given by id, with its secret `seeds` (one
     /// per repeat index, the final run's after the ranking's), and its tournaments.
@@ -665,6 +682,24 @@ impl Storage {
         Ok(true)
     }
 
+    /// How many of an entrant's versions in a competition since `since` count against
+    /// its quota (as [`Storage::counted_version_times`]), read in transaction `tx`.
+    pub(crate) async fn count_counted_versions_in(
+        tx: &mut sqlx::AnyConnection,
+        competition_id: i64,
+        entrant_id: i64,
+        since: i64,
+    ) -> Result<i64> {
+        Ok(sqlx::query_scalar(&format!(
+            "select cast(count(*) as bigint) {COUNTED_VERSIONS}"
+        ))
+        .bind(competition_id)
+        .bind(entrant_id)
+        .bind(since)
+        .fetch_one(&mut *tx)
+        .await?)
+    }
+
     /// The upload times of an entrant's versions in a competition since `since` that
     /// count against its quota: not failed to build, none of their ranking matches
     /// aborted.
@@ -677,19 +712,14 @@ impl Storage {
         entrant_id: i64,
         since: i64,
     ) -> Result<Vec<i64>> {
-        Ok(sqlx::query_scalar(
-            "select v.created_at from bot_version v
-             join competition_entry e on e.bot_id = v.bot_id and v.bot_version_id >= e.first_version_id
-             where e.competition_id = $1 and e.entrant_id = $2 and v.created_at > $3
-                 and v.build_status <> 'build_failed'
-                 and not exists (select 1 from match m join tournament t on t.tournament_id = m.tournament_id
-                     where t.competition_id = $1 and m.bot_version_id = v.bot_version_id and m.status = 'aborted')",
+        Ok(
+            sqlx::query_scalar(&format!("select v.created_at {COUNTED_VERSIONS}"))
+                .bind(c.competition_id)
+                .bind(entrant_id)
+                .bind(since)
+                .fetch_all(self.pool())
+                .await?,
         )
-        .bind(c.competition_id)
-        .bind(entrant_id)
-        .bind(since)
-        .fetch_all(self.pool())
-        .await?)
     }
 
     /// When an entrant's practice matches on a competition's practice mazes since
@@ -703,17 +733,14 @@ impl Storage {
         entrant_id: i64,
         since: i64,
     ) -> Result<Vec<i64>> {
-        Ok(sqlx::query_scalar(
-            "select m.created_at from match m join bot b on b.bot_id = m.bot_id
-             where b.entrant_id = $2 and m.tournament_id is null and m.created_at > $3
-                 and m.maze_id in (select maze_id from competition_maze
-                                   where competition_id = $1 and maze_set = 'practice')",
+        Ok(
+            sqlx::query_scalar(&format!("select m.created_at {PRACTICE_MATCHES}"))
+                .bind(competition_id)
+                .bind(entrant_id)
+                .bind(since)
+                .fetch_all(self.pool())
+                .await?,
         )
-        .bind(competition_id)
-        .bind(entrant_id)
-        .bind(since)
-        .fetch_all(self.pool())
-        .await?)
     }
 
     /// Every version's line in tournament `tournament_id`, from the running sums; with

@@ -170,6 +170,40 @@ const SAME_OWNER: &str = "b.bot_id in (
         or (x.entrant_id is null and o.entrant_id is null
             and o.owner_token_hash = x.owner_token_hash)))";
 
+/// What a single match must hold to be queued ([`Storage::queue_match_within`]).
+#[derive(Debug, Clone, Default)]
+pub struct QueueLimits {
+    /// The bot whose owner's matches are counted.
+    pub bot_id: i64,
+    /// The most matches its owner may have waiting (`None`: no limit).
+    pub most_queued: Option<i64>,
+    /// The practice quotas of the competitions whose practice maze it is.
+    pub practice: Vec<PracticeQuota>,
+}
+
+/// A competition's practice quota: at most `limit` practice matches of entrant
+/// `entrant_id` on competition `competition_id`'s practice mazes queued after `since`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PracticeQuota {
+    /// The competition.
+    pub competition_id: i64,
+    /// The entrant whose matches are counted.
+    pub entrant_id: i64,
+    /// The most matches.
+    pub limit: i64,
+    /// Matches queued after this time (unix ms) count.
+    pub since: i64,
+}
+
+/// Why [`Storage::queue_match_within`] did not queue a match.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QueueRefusal {
+    /// The owner has this many matches waiting, its limit or more.
+    Queued(i64),
+    /// This practice quota is used up.
+    Practice(PracticeQuota),
+}
+
 /// Marks the lane and class of claimed match `$1` as served last.
 const MARK_SERVED: &str = "
     insert into queue_lane (lane, served)
@@ -343,6 +377,76 @@ impl Storage {
         .bind(now_ms())
         .fetch_one(self.pool())
         .await?)
+    }
+
+    /// Queues a single match as [`Storage::queue_match`] does, unless it would go over
+    /// one of `limits` (counted again here, so that requests sent at once cannot all
+    /// pass the caller's own check and then all be queued): then nothing is written.
+    /// The counting and the insert are one owner's at a time (PostgreSQL: a
+    /// transaction-long lock on the bot's owner; SQLite: this process's write turn).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn queue_match_within(
+        &self,
+        bot_version_id: i64,
+        maze_id: i64,
+        seed: i64,
+        limits: &QueueLimits,
+    ) -> Result<std::result::Result<i64, QueueRefusal>> {
+        let _turn = self.write_turn().await;
+        let mut tx = self.pool().begin().await?;
+        if self.backend() == super::Backend::Postgres {
+            sqlx::query(
+                "select pg_advisory_xact_lock(hashtextextended((
+                     select coalesce('entrant ' || entrant_id, 'owner ' || owner_token_hash)
+                     from bot where bot_id = $1), 0))",
+            )
+            .bind(limits.bot_id)
+            .execute(&mut *tx)
+            .await?;
+        }
+        if let Some(most) = limits.most_queued {
+            let waiting: i64 = sqlx::query_scalar(&format!(
+                "select cast(count(*) as bigint) from match m join bot b on b.bot_id = m.bot_id
+                 where m.status = 'queued' and {SAME_OWNER}"
+            ))
+            .bind(limits.bot_id)
+            .fetch_one(&mut *tx)
+            .await?;
+            if waiting >= most {
+                tx.rollback().await?;
+                return Ok(Err(QueueRefusal::Queued(waiting)));
+            }
+        }
+        for q in &limits.practice {
+            let played: i64 = sqlx::query_scalar(&format!(
+                "select cast(count(*) as bigint) {}",
+                super::competitions::PRACTICE_MATCHES
+            ))
+            .bind(q.competition_id)
+            .bind(q.entrant_id)
+            .bind(q.since)
+            .fetch_one(&mut *tx)
+            .await?;
+            if played >= q.limit {
+                tx.rollback().await?;
+                return Ok(Err(QueueRefusal::Practice(*q)));
+            }
+        }
+        let match_id = sqlx::query_scalar(
+            "insert into match (bot_version_id, maze_id, seed, priority, created_at)
+             values ($1, $2, $3, $4, $5) returning match_id",
+        )
+        .bind(bot_version_id)
+        .bind(maze_id)
+        .bind(seed)
+        .bind(PRIORITY_SINGLE)
+        .bind(now_ms())
+        .fetch_one(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        Ok(Ok(match_id))
     }
 
     /// The number of matches waiting to be played.

@@ -413,16 +413,19 @@ async fn play_a_competition(server: &TestServer) {
     assert_eq!((s, v["phase"].as_str()), (200, Some("frozen")), "{v}");
 
     // Quotas: 2 versions a day (the first counts); the third is refused and says when.
+    // Four uploads sent at once: one is the second version, the other three are
+    // refused (each passes the check made before its files are read; the quota is
+    // counted again where the version is added).
     let (ada, ada_bot) = (teams[0].0.clone(), teams[0].1);
     let upload = json!({"command": "python3 simple_bot.py", "files": simple_bot_files()});
-    let (s, v) = server
-        .post(
-            &format!("/api/bots/{ada_bot}/versions"),
-            upload.clone(),
-            Some(&ada),
-        )
-        .await;
-    assert_eq!(s, 201, "{v}");
+    let path = format!("/api/bots/{ada_bot}/versions");
+    let at_once = futures_util::future::join_all(
+        (0..4).map(|_| server.post(&path, upload.clone(), Some(&ada))),
+    )
+    .await;
+    let mut statuses: Vec<u16> = at_once.iter().map(|(s, _)| *s).collect();
+    statuses.sort_unstable();
+    assert_eq!(statuses, [201, 429, 429, 429], "{at_once:?}");
     let (s, v) = server
         .post(
             &format!("/api/bots/{ada_bot}/versions"),
@@ -452,12 +455,16 @@ async fn play_a_competition(server: &TestServer) {
         .get("/api/competitions/class-2027/submissions", None)
         .await;
     assert_eq!(s, 401);
-    // Practice: 1 a day on the practice maze.
+    // Practice: 1 a day on the practice maze. Three asked at once: one is queued.
     let practice_match = json!({"bot_id": ada_bot, "maze_id": practice, "seed": 1});
-    let (s, v) = server
-        .post("/api/matches", practice_match.clone(), Some(&ada))
-        .await;
-    assert_eq!(s, 202, "{v}");
+    let at_once = futures_util::future::join_all(
+        (0..3).map(|_| server.post("/api/matches", practice_match.clone(), Some(&ada))),
+    )
+    .await;
+    let mut statuses: Vec<u16> = at_once.iter().map(|(s, _)| *s).collect();
+    statuses.sort_unstable();
+    assert_eq!(statuses, [202, 429, 429], "{at_once:?}");
+    let v = at_once.into_iter().find(|(s, _)| *s == 202).unwrap().1;
     // Its stderr is Ada's: not another entrant's, not the organiser's.
     let practice_id = v["match_id"].as_i64().unwrap();
     for token in [&teams[1].0, &organiser] {

@@ -295,9 +295,17 @@ async fn create_bot_version(
     }
     let (_, submission) = read_upload(&state, request).await?.submission()?;
     check_runtime(&state, submission.runtime.as_deref())?;
-    let row =
-        registry::bots::add_version(&state.storage, id, submission, &state.settings.scratch())
-            .await?;
+    // Counted again where the version is added: uploads sent at once all pass the
+    // check above before any is added.
+    let quotas = registry::competitions::version_quotas(&state.storage, id, now).await?;
+    let row = registry::bots::add_version(
+        &state.storage,
+        id,
+        submission,
+        &state.settings.scratch(),
+        &quotas,
+    )
+    .await?;
     state.wake.notify_waiters();
     Ok((StatusCode::CREATED, axum::Json(row.into())))
 }
