@@ -313,7 +313,7 @@ async fn the_readme_scale_out_example_runs_as_written_on_postgresql() {
 async fn the_readme_competition_example_runs_as_written() {
     let dir = tempfile::tempdir().unwrap();
     let work = dir.path().join("work");
-    std::fs::create_dir_all(work.join("class-2027")).unwrap();
+    std::fs::create_dir_all(work.join("maze-cup")).unwrap();
     for link in ["bots", "mazes"] {
         std::os::unix::fs::symlink(root().join(link), work.join(link)).unwrap();
     }
@@ -321,13 +321,13 @@ async fn the_readme_competition_example_runs_as_written() {
     let server = TestServer::start_on(dir.path(), Some(&database), &["--jobs", "2"], &[]);
     let addr = server.base.trim_start_matches("http://").to_string();
     let file = blocks_of("Running a competition", "toml").remove(0);
-    std::fs::write(work.join("class-2027/competition.toml"), file).unwrap();
+    std::fs::write(work.join("maze-cup/competition.toml"), file).unwrap();
     let blocks = blocks("Running a competition");
     assert_eq!(blocks.len(), 4, "{blocks:?}");
     let run = |block: &str| sh(&work, &block.replace("localhost:8080", &addr), &[]);
     // The mazes and the competition, from its file.
     run(&blocks[0]);
-    let (_, c) = server.get("/api/competitions/class-2027", None).await;
+    let (_, c) = server.get("/api/competitions/maze-cup", None).await;
     assert_eq!(
         (c["phase"].as_str(), c["mazes"].as_array().map(Vec::len)),
         (Some("open"), Some(5)),
@@ -335,11 +335,11 @@ async fn the_readme_competition_example_runs_as_written() {
     );
     // An entrant enters a bot; it is ranked with nothing done by hand.
     let out = run(&blocks[1]);
-    assert!(out.contains("\"competition\":\"class-2027\""), "{out}");
+    assert!(out.contains("\"competition\":\"maze-cup\""), "{out}");
     let deadline = Instant::now() + Duration::from_secs(180);
     loop {
         let (_, b) = server
-            .get("/api/competitions/class-2027/leaderboard", None)
+            .get("/api/competitions/maze-cup/leaderboard", None)
             .await;
         if b["standings"].as_array().is_some_and(|r| r.len() == 1) {
             assert_eq!(b["standings"][0]["played"], 4, "{b}");
@@ -370,7 +370,7 @@ async fn the_readme_competition_example_runs_as_written() {
     assert!(html.contains("id=\"replay-data\""));
     loop {
         let (_, b) = server
-            .get("/api/competitions/class-2027/leaderboard", None)
+            .get("/api/competitions/maze-cup/leaderboard", None)
             .await;
         if b["standings"].as_array().is_some_and(|r| r.len() == 2) {
             break;
@@ -384,7 +384,7 @@ async fn the_readme_competition_example_runs_as_written() {
     // Closed now; the results come after the final run.
     run(&blocks[2]);
     loop {
-        let (_, c) = server.get("/api/competitions/class-2027", None).await;
+        let (_, c) = server.get("/api/competitions/maze-cup", None).await;
         if c["state"] == "final" {
             break;
         }
@@ -405,10 +405,10 @@ async fn the_readme_competition_example_runs_as_written() {
     // The export makes the same competition again on another database.
     let again = sh(
         &work,
-        "mazearena competition create class-2027-export/competition.toml --database sqlite://other.db",
+        "mazearena competition create maze-cup-export/competition.toml --database sqlite://other.db",
         &[],
     );
-    assert!(again.contains("class-2027: Closed"), "{again}");
+    assert!(again.contains("maze-cup: Closed"), "{again}");
 }
 
 /// What the README's examples write in the checkout is ignored by git.
@@ -422,8 +422,8 @@ fn what_the_readme_examples_write_is_ignored_by_git() {
         "ada-bot.tar.gz",
         "mazearena.db",
         "mazearena-data/bots/x",
-        "class-2027/mazes/public-1.txt",
-        "class-2027-export/competition.toml",
+        "maze-cup/mazes/public-1.txt",
+        "maze-cup-export/competition.toml",
         "bots/c/minimal_bot",
         "bots/cpp/minimal_bot",
         "bots/cpp/mazebot.o",
