@@ -28,25 +28,39 @@ pub struct SandboxArgs {
     /// A language runtime's install folder that bots may use, mounted read-only in
     /// every bot's view, its `bin` first on their PATH (repeatable; a venv brings its
     /// base interpreter): a pyenv version, a venv, a Node prefix, a rustup toolchain, a
-    /// JDK, a Go root. Never a home folder or a folder holding dotfiles. In the
-    /// environment: folders separated by `:`.
-    #[arg(
-        long = "runtime",
-        value_name = "DIR",
-        env = "MAZEARENA_RUNTIMES",
-        value_delimiter = ':'
-    )]
-    pub runtimes: Vec<PathBuf>,
+    /// JDK, a Go root. Never a home folder or a folder holding dotfiles. Without it:
+    /// `MAZEARENA_RUNTIMES`, folders separated by `:` (empty parts, or an empty
+    /// variable, name none).
+    #[arg(long = "runtime", value_name = "DIR")]
+    runtime: Vec<PathBuf>,
+}
+
+/// The variable that lists runtimes when `--runtime` is not given.
+const RUNTIMES_VAR: &str = "MAZEARENA_RUNTIMES";
+
+/// The folders `list` names (a `:`-separated list; empty parts name none).
+fn split_runtimes(list: &std::ffi::OsStr) -> Vec<PathBuf> {
+    std::env::split_paths(list)
+        .filter(|p| !p.as_os_str().is_empty())
+        .collect()
 }
 
 impl SandboxArgs {
+    /// The runtimes listed for bots: `--runtime`, else `MAZEARENA_RUNTIMES`.
+    pub fn runtimes(&self) -> Vec<PathBuf> {
+        if !self.runtime.is_empty() {
+            return self.runtime.clone();
+        }
+        std::env::var_os(RUNTIMES_VAR).map_or_else(Vec::new, |v| split_runtimes(&v))
+    }
+
     /// What the full sandbox is set up with: `hide` lists paths that must never be
     /// visible to a bot (data dir, database); `local` finds each bot's runtime from its
     /// program too (`run`, `tournament`: the owner is the operator).
     pub fn setup(&self, hide: &[PathBuf], local: bool) -> Setup {
         Setup {
             hide: hide.to_vec(),
-            runtimes: self.runtimes.clone(),
+            runtimes: self.runtimes(),
             detect: local,
             reuse: false,
         }
@@ -186,4 +200,20 @@ pub fn sandbox_serve() -> std::process::ExitCode {
 fn setup_failed(reason: String) -> std::process::ExitCode {
     eprintln!("mazearena sandbox: {reason}");
     std::process::ExitCode::from(jail::SETUP_FAILED as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_runtime_list_skips_empty_parts_and_an_empty_list_names_none() {
+        let list = |s: &str| split_runtimes(std::ffi::OsStr::new(s));
+        assert!(list("").is_empty());
+        assert!(list(":").is_empty());
+        assert_eq!(
+            list("/opt/a::/opt/b:"),
+            [PathBuf::from("/opt/a"), PathBuf::from("/opt/b")]
+        );
+    }
 }

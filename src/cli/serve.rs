@@ -247,7 +247,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     let offered = match &sandbox {
         Some(crate::runner::Sandbox::Full(f)) => f.runtimes.clone(),
         Some(crate::runner::Sandbox::None) => Vec::new(),
-        None => crate::runner::sandbox::listed_runtimes(&args.sandbox.runtimes, &hide)
+        None => crate::runner::sandbox::listed_runtimes(&args.sandbox.runtimes(), &hide)
             .map_err(|e| anyhow::anyhow!("{e}"))?,
     };
     let runtimes = Arc::new(crate::runner::runtimes::probe(&offered).await);
