@@ -7,7 +7,7 @@
 //! a match runs; a match whose worker died goes back to the queue when its lease expires
 //! (the reaper), so nothing accepted is ever lost, and the lease check on writing makes
 //! sure nothing is recorded twice. A match whose lease keeps expiring is retried at most
-//! [`crate::storage::matches::MAX_MATCH_RETRIES`] times, then recorded as `aborted`.
+//! [`crate::storage::retries::MAX_MATCH_RETRIES`] times, then recorded as `aborted`.
 
 use std::path::PathBuf;
 use std::sync::Arc;

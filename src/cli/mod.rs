@@ -74,8 +74,8 @@ pub enum Command {
 }
 
 /// A step of the sandbox, when this process was started as `mazearena sandbox-exec ...`
-/// (the jail inside it: [`sandbox::sandbox_exec`]) or `mazearena sandbox-enter ...` (the
-/// cgroup join before it: [`sandbox::sandbox_enter`]). Neither returns, unless it failed;
+/// (the jail inside it: `sandbox::sandbox_exec`) or `mazearena sandbox-enter ...` (the
+/// cgroup join before it: `sandbox::sandbox_enter`). Neither returns, unless it failed;
 /// `None` for every other command line.
 pub fn sandbox_exec_if_asked() -> Option<std::process::ExitCode> {
     use crate::runner::sandbox::{ENTER_SUBCOMMAND, JAIL_SUBCOMMAND, SERVE_SUBCOMMAND};

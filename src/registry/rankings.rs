@@ -63,7 +63,7 @@ type Table = Arc<Vec<(i64, Uncertainty)>>;
 /// How many tables a [`Ranker`] keeps.
 const KEPT: usize = 32;
 
-/// Ranks standings, keeping the last [`KEPT`] tables it made.
+/// Ranks standings, keeping the last `KEPT` tables it made.
 #[derive(Default)]
 pub struct Ranker {
     kept: Mutex<Vec<(Key, Table)>>,

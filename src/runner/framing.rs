@@ -72,7 +72,7 @@ impl<R: AsyncRead + Unpin> StderrReader<R> {
     }
 
     /// Waits for `event` while reading the stderr, taking in every stderr byte the
-    /// pipe holds before `event` is looked at (up to [`STDERR_READS_BEFORE_REPLY`]
+    /// pipe holds before `event` is looked at (up to `STDERR_READS_BEFORE_REPLY`
     /// reads in a row). Cancel safe when `event` is.
     pub async fn drain_while<F: std::future::Future>(&mut self, event: F) -> F::Output {
         use futures_util::FutureExt;

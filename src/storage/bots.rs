@@ -1,5 +1,5 @@
 //! Bots and their versions, and pausing: a bot whose matches keep aborting (see
-//! [`super::matches::PAUSE_AFTER_ABORTS`]) is paused until an admin resumes it or a new
+//! [`super::retries::PAUSE_AFTER_ABORTS`]) is paused until an admin resumes it or a new
 //! version is uploaded.
 
 use sqlx::FromRow;

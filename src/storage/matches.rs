@@ -524,7 +524,7 @@ impl Storage {
         .await?)
     }
 
-    /// Claims the next queued match in the fair order ([`FAIR_ORDER`]) for `owner` until
+    /// Claims the next queued match in the fair order (`FAIR_ORDER`) for `owner` until
     /// `now + lease_ms`, in one statement. With `tournament`, only that tournament's, in
     /// order. Matches of a paused bot are never claimed.
     ///

@@ -136,7 +136,7 @@ pub struct Setup {
 
 impl FullSandbox {
     /// The command that runs `jail` inside a sandbox made with bubblewrap arguments
-    /// `bwrap_args` (from [`view::bwrap_args`]), with an empty environment of its own.
+    /// `bwrap_args` (from `view::bwrap_args`), with an empty environment of its own.
     /// With a `cgroup`, it starts as `mazearena sandbox-enter` ([`enter`]), which joins
     /// the cgroup before it runs bubblewrap: nothing needs to run in the server between
     /// `fork` and `exec`, so the command can start with `posix_spawn`.

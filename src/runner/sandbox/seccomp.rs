@@ -91,9 +91,9 @@ fn arch() -> Result<seccompiler::TargetArch, FilterError> {
 }
 
 /// The filters a one-shot sandbox's jail installs, in order: the whole deny list
-/// (`EPERM`), then [`x86_64_abi_and_clone3`] (or its equivalent elsewhere).
+/// (`EPERM`), then `x86_64_abi_and_clone3` (or its equivalent elsewhere).
 ///
-/// The deny list refuses [`DENIED_ALWAYS`], [`DENIED_PER_MATCH`] and `clone` with
+/// The deny list refuses `DENIED_ALWAYS`, `DENIED_PER_MATCH` and `clone` with
 /// namespace flags; `clone3` is answered `ENOSYS` so that C libraries fall back to `clone`,
 /// whose flags the filter sees. On x86_64 the second filter also refuses (`EPERM`) every
 /// system call made through the x32 ABI (numbers with [`X32_SYSCALL_BIT`]): the deny list
@@ -112,7 +112,7 @@ pub fn filters() -> Result<Vec<BpfProgram>, FilterError> {
 }
 
 /// What a warm sandbox's supervisor installs on itself when it starts, before it takes
-/// any request: [`DENIED_ALWAYS`]. Every match's init, and so its bot, inherits it.
+/// any request: `DENIED_ALWAYS`. Every match's init, and so its bot, inherits it.
 ///
 /// # Errors
 /// [`FilterError`] on an architecture seccompiler does not know.
@@ -121,7 +121,7 @@ pub fn helper_filter() -> Result<BpfProgram, FilterError> {
 }
 
 /// What a warm match's init installs behind its other walls, on top of the supervisor's
-/// [`helper_filter`]: [`DENIED_PER_MATCH`] and `clone` with namespace flags, then the
+/// [`helper_filter`]: `DENIED_PER_MATCH` and `clone` with namespace flags, then the
 /// second filter. Together the two refuse what [`filters`] refuses; the kernel prepares
 /// its cache of allowed calls for each filter it attaches, and a shorter filter attached
 /// per match costs less than the whole list (about 0.1 ms a match here).

@@ -85,7 +85,7 @@ impl UidLease {
     /// Takes the lowest free uid of this process's block.
     ///
     /// # Errors
-    /// No block can be reserved, or all [`SLOTS`] uids of it are in use.
+    /// No block can be reserved, or all `SLOTS` uids of it are in use.
     pub fn take() -> Result<UidLease, String> {
         let block = block()?;
         let mut taken = TAKEN.lock().unwrap_or_else(|p| p.into_inner());
