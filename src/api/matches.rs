@@ -201,15 +201,22 @@ async fn create_match(
     }
     check_capacity(&state, 1).await?;
     let now = crate::storage::now_ms();
-    if let Some((message, quota)) =
-        crate::registry::competitions::check_practice(&state.storage, bot.bot_id, maze.maze_id, now)
-            .await?
+    let practice = match crate::registry::competitions::check_practice(
+        &state.storage,
+        bot.bot_id,
+        maze.maze_id,
+        now,
+    )
+    .await?
     {
-        return Err(ApiError::TooManyRequests {
-            message,
-            retry_after_secs: quota.retry_after_secs(now),
-        });
-    }
+        Ok(quotas) => quotas,
+        Err((message, quota)) => {
+            return Err(ApiError::TooManyRequests {
+                message,
+                retry_after_secs: quota.retry_after_secs(now),
+            });
+        }
+    };
     if !caller.is_admin() {
         if let Some(cap) = state.settings.max_stored_bytes_per_owner {
             let stored = state.storage.stored_bytes_of_owner_of(bot.bot_id).await?;
@@ -239,13 +246,7 @@ async fn create_match(
     let limits = QueueLimits {
         bot_id: bot.bot_id,
         most_queued: (!caller.is_admin()).then_some(state.settings.max_queued_per_owner),
-        practice: crate::registry::competitions::practice_quotas(
-            &state.storage,
-            bot.bot_id,
-            maze.maze_id,
-            now,
-        )
-        .await?,
+        practice,
     };
     let match_id = match state
         .storage

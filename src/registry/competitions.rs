@@ -16,6 +16,7 @@ use crate::competition::{
 };
 use crate::engine::mazefile;
 use crate::storage::Storage;
+use crate::storage::bots::VersionQuota;
 use crate::storage::competitions::{BoardRow, CompetitionMaze, CompetitionRow, ResultRow};
 use crate::storage::leaderboard::Scope;
 use crate::storage::matches::PracticeQuota;
@@ -330,7 +331,10 @@ pub enum UploadRefusal {
     Quota(String, Quota),
 }
 
-/// Whether bot `bot_id` may get a new version at `now` (see [`UploadRefusal`]).
+/// Whether bot `bot_id` may get a new version at `now` (see [`UploadRefusal`]); if so,
+/// the version quotas it must still hold, one for each competition it is entered in.
+/// They go to [`super::bots::add_version`], which counts them again in the transaction
+/// that adds the version: uploads sent at once all pass this check before any is added.
 ///
 /// # Errors
 /// The database.
@@ -338,44 +342,25 @@ pub async fn check_upload(
     storage: &Storage,
     bot_id: i64,
     now: i64,
-) -> Result<Option<UploadRefusal>> {
+) -> Result<std::result::Result<Vec<VersionQuota>, UploadRefusal>> {
+    let mut quotas = Vec::new();
     for c in storage.competitions_of_bot(bot_id).await? {
         if phase(&c, now) == Phase::Closed {
-            return Ok(Some(UploadRefusal::Closed(format!(
+            return Ok(Err(UploadRefusal::Closed(format!(
                 "competition {} closed at {} UTC: no new versions",
                 c.name,
                 Timestamp(c.closes_at.unwrap_or(0)).rfc3339()
             ))));
         }
-        if let Some(entrant) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
-            let quota = version_quota(storage, &c, entrant, now).await?;
+        if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
+            let quota = version_quota(storage, &c, entrant_id, now).await?;
             if !quota.allows_one_more() {
-                return Ok(Some(UploadRefusal::Quota(
+                return Ok(Err(UploadRefusal::Quota(
                     format!("competition {}: {}", c.name, quota.message),
                     quota,
                 )));
             }
-        }
-    }
-    Ok(None)
-}
-
-/// The version quotas a new version of bot `bot_id` at `now` must hold, one for each
-/// competition it is entered in: given to [`super::bots::add_version`], which counts
-/// them again in the transaction that adds the version (uploads sent at once cannot
-/// all pass [`check_upload`] and then all be added).
-///
-/// # Errors
-/// The database.
-pub async fn version_quotas(
-    storage: &Storage,
-    bot_id: i64,
-    now: i64,
-) -> Result<Vec<crate::storage::bots::VersionQuota>> {
-    let mut quotas = Vec::new();
-    for c in storage.competitions_of_bot(bot_id).await? {
-        if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
-            quotas.push(crate::storage::bots::VersionQuota {
+            quotas.push(VersionQuota {
                 competition_id: c.competition_id,
                 entrant_id,
                 limit: c.versions_per_day,
@@ -383,7 +368,7 @@ pub async fn version_quotas(
             });
         }
     }
-    Ok(quotas)
+    Ok(Ok(quotas))
 }
 
 /// The refusal of a version that quota `q` did not allow at `now` (found full when
@@ -391,11 +376,7 @@ pub async fn version_quotas(
 ///
 /// # Errors
 /// The database.
-pub async fn quota_refusal(
-    storage: &Storage,
-    q: crate::storage::bots::VersionQuota,
-    now: i64,
-) -> Result<RegistryError> {
+pub async fn quota_refusal(storage: &Storage, q: VersionQuota, now: i64) -> Result<RegistryError> {
     let c = storage
         .get_competition_by_id(q.competition_id)
         .await?
@@ -409,7 +390,10 @@ pub async fn quota_refusal(
 
 /// Whether bot `bot_id` may play one more practice match on maze `maze_id` at `now`:
 /// the refusal (what it says, the quota) when the maze is a practice maze of a
-/// competition the bot is entered in and its entrant's practice quota there is used up.
+/// competition the bot is entered in and its entrant's practice quota there is used up;
+/// else the practice quotas the match must still hold, one for each such competition.
+/// They go to [`Storage::queue_match_within`], which counts them again where the match
+/// is queued: requests sent at once all pass this check before any is queued.
 ///
 /// # Errors
 /// The database.
@@ -418,41 +402,7 @@ pub async fn check_practice(
     bot_id: i64,
     maze_id: i64,
     now: i64,
-) -> Result<Option<(String, Quota)>> {
-    for c in storage.competitions_of_bot(bot_id).await? {
-        let practice = storage
-            .competition_mazes(c.competition_id)
-            .await?
-            .iter()
-            .any(|m| m.maze_id == maze_id && m.maze_set == "practice");
-        if !practice {
-            continue;
-        }
-        if let Some(entrant) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
-            let quota = practice_quota(storage, &c, entrant, now).await?;
-            if !quota.allows_one_more() {
-                return Ok(Some((
-                    format!("competition {}: {}", c.name, quota.message),
-                    quota,
-                )));
-            }
-        }
-    }
-    Ok(None)
-}
-
-/// The practice quotas one more match of bot `bot_id` on maze `maze_id` at `now` must
-/// hold: one for each competition it is entered in whose practice maze it is. Given to
-/// [`Storage::queue_match_within`], which counts them again where the match is queued.
-///
-/// # Errors
-/// The database.
-pub async fn practice_quotas(
-    storage: &Storage,
-    bot_id: i64,
-    maze_id: i64,
-    now: i64,
-) -> Result<Vec<PracticeQuota>> {
+) -> Result<std::result::Result<Vec<PracticeQuota>, (String, Quota)>> {
     let mut quotas = Vec::new();
     for c in storage.competitions_of_bot(bot_id).await? {
         let practice = storage
@@ -464,6 +414,13 @@ pub async fn practice_quotas(
             continue;
         }
         if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
+            let quota = practice_quota(storage, &c, entrant_id, now).await?;
+            if !quota.allows_one_more() {
+                return Ok(Err((
+                    format!("competition {}: {}", c.name, quota.message),
+                    quota,
+                )));
+            }
             quotas.push(PracticeQuota {
                 competition_id: c.competition_id,
                 entrant_id,
@@ -472,7 +429,7 @@ pub async fn practice_quotas(
             });
         }
     }
-    Ok(quotas)
+    Ok(Ok(quotas))
 }
 
 /// What practice quota `q`, found used up when a match was to be queued, says at

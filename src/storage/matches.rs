@@ -170,6 +170,26 @@ const SAME_OWNER: &str = "b.bot_id in (
         or (x.entrant_id is null and o.entrant_id is null
             and o.owner_token_hash = x.owner_token_hash)))";
 
+/// Inserts a queued single match (not a tournament's); its id.
+async fn insert_single(
+    conn: &mut sqlx::AnyConnection,
+    bot_version_id: i64,
+    maze_id: i64,
+    seed: i64,
+) -> Result<i64> {
+    Ok(sqlx::query_scalar(
+        "insert into match (bot_version_id, maze_id, seed, priority, created_at)
+         values ($1, $2, $3, $4, $5) returning match_id",
+    )
+    .bind(bot_version_id)
+    .bind(maze_id)
+    .bind(seed)
+    .bind(PRIORITY_SINGLE)
+    .bind(now_ms())
+    .fetch_one(conn)
+    .await?)
+}
+
 /// What a single match must hold to be queued ([`Storage::queue_match_within`]).
 #[derive(Debug, Clone, Default)]
 pub struct QueueLimits {
@@ -366,17 +386,8 @@ impl Storage {
     /// # Errors
     /// Database failures (including unknown bot version or maze ids).
     pub async fn queue_match(&self, bot_version_id: i64, maze_id: i64, seed: i64) -> Result<i64> {
-        Ok(sqlx::query_scalar(
-            "insert into match (bot_version_id, maze_id, seed, priority, created_at)
-             values ($1, $2, $3, $4, $5) returning match_id",
-        )
-        .bind(bot_version_id)
-        .bind(maze_id)
-        .bind(seed)
-        .bind(PRIORITY_SINGLE)
-        .bind(now_ms())
-        .fetch_one(self.pool())
-        .await?)
+        let mut conn = self.pool().acquire().await?;
+        insert_single(&mut conn, bot_version_id, maze_id, seed).await
     }
 
     /// Queues a single match as [`Storage::queue_match`] does, unless it would go over
@@ -434,17 +445,7 @@ impl Storage {
                 return Ok(Err(QueueRefusal::Practice(*q)));
             }
         }
-        let match_id = sqlx::query_scalar(
-            "insert into match (bot_version_id, maze_id, seed, priority, created_at)
-             values ($1, $2, $3, $4, $5) returning match_id",
-        )
-        .bind(bot_version_id)
-        .bind(maze_id)
-        .bind(seed)
-        .bind(PRIORITY_SINGLE)
-        .bind(now_ms())
-        .fetch_one(&mut *tx)
-        .await?;
+        let match_id = insert_single(&mut tx, bot_version_id, maze_id, seed).await?;
         tx.commit().await?;
         Ok(Ok(match_id))
     }

@@ -281,23 +281,22 @@ async fn create_bot_version(
     }
     caller.require_owner(&state, id).await?;
     let now = crate::storage::now_ms();
-    match registry::competitions::check_upload(&state.storage, id, now).await? {
-        None => {}
-        Some(registry::competitions::UploadRefusal::Closed(message)) => {
+    let quotas = match registry::competitions::check_upload(&state.storage, id, now).await? {
+        Ok(quotas) => quotas,
+        Err(registry::competitions::UploadRefusal::Closed(message)) => {
             return Err(ApiError::Conflict(message));
         }
-        Some(registry::competitions::UploadRefusal::Quota(message, quota)) => {
+        Err(registry::competitions::UploadRefusal::Quota(message, quota)) => {
             return Err(ApiError::TooManyRequests {
                 message,
                 retry_after_secs: quota.retry_after_secs(now),
             });
         }
-    }
+    };
     let (_, submission) = read_upload(&state, request).await?.submission()?;
     check_runtime(&state, submission.runtime.as_deref())?;
-    // Counted again where the version is added: uploads sent at once all pass the
-    // check above before any is added.
-    let quotas = registry::competitions::version_quotas(&state.storage, id, now).await?;
+    // The quotas are counted again where the version is added: uploads sent at once
+    // all pass the check above before any is added.
     let row = registry::bots::add_version(
         &state.storage,
         id,
