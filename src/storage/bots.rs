@@ -152,7 +152,7 @@ impl Storage {
         owner_token_hash: &str,
         first: &NewVersion<'_>,
     ) -> Result<BotVersionRow> {
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let now = now_ms();
         let bot_id: i64 = sqlx::query_scalar(
             "insert into bot (name, owner_token_hash, created_at) values ($1, $2, $3) returning bot_id",
@@ -184,7 +184,7 @@ impl Storage {
         bot_id: i64,
         new: &NewVersion<'_>,
     ) -> Result<BotVersionRow> {
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let row = insert_version(&mut tx, bot_id, new).await?;
         resume_in(&mut tx, bot_id).await?;
         tx.commit().await?;
@@ -208,7 +208,7 @@ impl Storage {
         let mut quotas = quotas.to_vec();
         // One order for the locks, so two uploads never wait for each other.
         quotas.sort_by_key(|q| (q.entrant_id, q.competition_id));
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         for q in &quotas {
             sqlx::query("update entrant set created_at = created_at where entrant_id = $1")
                 .bind(q.entrant_id)
@@ -239,7 +239,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn pause_bot(&self, bot_id: i64, reason: &str) -> Result<bool> {
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let paused = pause_bot_in(&mut tx, bot_id, reason, now_ms()).await?;
         tx.commit().await?;
         Ok(paused)
@@ -252,7 +252,7 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn resume_bot(&self, bot_id: i64) -> Result<bool> {
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let resumed = resume_in(&mut tx, bot_id).await?;
         tx.commit().await?;
         Ok(resumed)

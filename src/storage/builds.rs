@@ -111,7 +111,7 @@ impl Storage {
         };
         let now = now_ms();
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let done = sqlx::query(
             "update bot_version set build_status = $1, build_log = $2, built_at = $3,
                  built_sha256 = $4, build_owner = null, build_lease_expires_at = null

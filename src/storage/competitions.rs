@@ -251,7 +251,7 @@ impl Storage {
         let now = now_ms();
         let limits = serde_json::to_string(&spec.limits).unwrap_or_else(|_| "{}".into());
         let seeds = serde_json::to_string(seeds).unwrap_or_else(|_| "[]".into());
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let mut tournaments = Vec::new();
         for (set, sealed) in [("public ranking", 0), ("private ranking", 1)] {
             let id: i64 = sqlx::query_scalar(
@@ -394,7 +394,7 @@ impl Storage {
     /// Database failures.
     pub async fn save_competition_settings(&self, row: &CompetitionRow) -> Result<()> {
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         sqlx::query(
             "update competition set title = $2, description = $3, rules = $4, opens_at = $5,
                  closes_at = $6, freeze_ms = $7, versions_per_day = $8, practice_per_day = $9,
@@ -644,7 +644,7 @@ impl Storage {
     ) -> Result<bool> {
         let _turn = self.write_turn().await;
         let now = now_ms();
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let added = sqlx::query(
             "insert into competition_version (competition_id, bot_version_id, ranked_at)
              values ($1, $2, $3) on conflict do nothing",
@@ -829,7 +829,7 @@ impl Storage {
         version_ids: &[i64],
     ) -> Result<()> {
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         sqlx::query(
             "update competition_version set chosen = 0 where competition_id = $1 and bot_version_id in
                  (select v.bot_version_id from bot_version v join competition_entry e on e.bot_id = v.bot_id
@@ -906,7 +906,7 @@ impl Storage {
     ) -> Result<bool> {
         let _turn = self.write_turn().await;
         let now = now_ms();
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let moved = sqlx::query(
             "update competition set state = 'final_run' where competition_id = $1 and state is null",
         )
@@ -976,7 +976,7 @@ impl Storage {
         reveal: &[i64],
     ) -> Result<bool> {
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let moved = sqlx::query(
             "update competition set state = 'final', finalized_at = $2
              where competition_id = $1 and state = 'final_run'",

@@ -406,7 +406,7 @@ impl Storage {
         limits: &QueueLimits,
     ) -> Result<std::result::Result<i64, QueueRefusal>> {
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         if self.backend() == super::Backend::Postgres {
             sqlx::query(
                 "select pg_advisory_xact_lock(hashtextextended((
@@ -471,7 +471,7 @@ impl Storage {
     /// Database failures.
     pub async fn prune_practice_records(&self, before_ms: i64) -> Result<(i64, i64)> {
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let (count, bytes): (i64, Option<i64>) = sqlx::query_as(
             "select count(*), cast(sum(length(r.data)) as bigint) from match_record r
              join match m on m.match_id = r.match_id
@@ -626,7 +626,7 @@ impl Storage {
     ) -> Result<bool> {
         let stored = StoredRecord::encode(match_id, record, maze)?;
         let _turn = self.write_turn().await;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let done = sqlx::query(
             "update match set status = $1, score = $2, run0_steps = $3, run1_steps = $4, total_steps = $5,
                  record = $6, trace = null, finished_at = $7, lease_owner = null, lease_expires_at = null
@@ -712,7 +712,7 @@ impl Storage {
                 break;
             };
             after = last.0;
-            let mut tx = self.pool().begin().await?;
+            let mut tx = self.begin_write().await?;
             for (match_id, record, trace, layout) in rows {
                 let whole = record
                     .as_deref()
@@ -956,6 +956,41 @@ mod tests {
             "warnings": [], "error": null, "stderr_tail": "", "timings": {"wall_ms": 1, "bot_cpu_ms": null, "max_answer_us": 1, "mean_answer_us": 1}
         }))
         .unwrap()
+    }
+
+    /// Two processes on one SQLite file (two storages: each has its own write turn)
+    /// queue matches at once. A transaction that counts and then inserts, begun
+    /// deferred, failed at its insert ("database is locked", SQLITE_BUSY_SNAPSHOT)
+    /// whenever the other had written since its count: a 500 for `POST /api/matches`.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn two_processes_on_one_sqlite_file_queue_matches_at_once_without_a_busy_error() {
+        let (a, dir) = crate::storage::test_support::fresh().await;
+        let url = format!("sqlite://{}", dir.path().join("test.db").display());
+        let b = Storage::open(&url).await.unwrap();
+        let (v, z) = bot_and_maze(&a).await;
+        let bot_id: i64 =
+            sqlx::query_scalar("select bot_id from bot_version where bot_version_id = $1")
+                .bind(v)
+                .fetch_one(a.pool())
+                .await
+                .unwrap();
+        let limits = QueueLimits {
+            bot_id,
+            most_queued: Some(1_000),
+            practice: Vec::new(),
+        };
+        let tasks: Vec<_> = (0..60)
+            .map(|i| {
+                let db = if i % 2 == 0 { a.clone() } else { b.clone() };
+                let limits = limits.clone();
+                tokio::spawn(async move { db.queue_match_within(v, z, i, &limits).await })
+            })
+            .collect();
+        for task in tasks {
+            let queued = task.await.unwrap();
+            assert!(matches!(queued, Ok(Ok(_))), "{queued:?}");
+        }
+        assert_eq!(a.queued_count().await.unwrap(), 60);
     }
 
     #[tokio::test]

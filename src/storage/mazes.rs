@@ -99,7 +99,7 @@ impl Storage {
         /// Mazes a lookup (1 parameter each) carries.
         const ROWS_PER_LOOKUP: usize = 500;
         let now = now_ms();
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         for chunk in mazes.chunks(super::ROWS_PER_INSERT) {
             let sql = format!(
                 "{INSERT} {} on conflict (hash) do nothing",

@@ -263,6 +263,22 @@ impl Storage {
         }
     }
 
+    /// Begins a transaction that writes. With SQLite it takes the database's write lock
+    /// at once (`BEGIN IMMEDIATE`, waiting up to [`BUSY_TIMEOUT`] for it): a deferred
+    /// transaction that reads first and then writes fails at once ("database is
+    /// locked", `SQLITE_BUSY_SNAPSHOT`) when another connection has written since its
+    /// read, as another process on the same file, or a write of this one outside
+    /// [`Storage::write_turn`], may have.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub(crate) async fn begin_write(&self) -> Result<sqlx::Transaction<'static, sqlx::Any>> {
+        Ok(match self.backend {
+            Backend::Sqlite => self.pool.begin_with("begin immediate").await?,
+            Backend::Postgres => self.pool.begin().await?,
+        })
+    }
+
     /// The tables of the schema and the columns of each, sorted (for comparing the two
     /// backends' schemas).
     ///

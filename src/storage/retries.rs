@@ -53,7 +53,7 @@ impl Storage {
         let retries = self.max_retries();
         let aborted_record =
             failure_record(MatchStatus::Aborted, &retries_exhausted_reason(retries))?;
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         // Write first, so the transaction holds the write lock from its start. In an
         // update every expression reads the row as it was before it.
         let rows: Vec<(i64, String, i64)> = sqlx::query_as(

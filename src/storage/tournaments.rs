@@ -47,7 +47,7 @@ impl Storage {
         maze_ids: &[i64],
         repeats: i64,
     ) -> Result<TournamentRow> {
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.begin_write().await?;
         let now = now_ms();
         let id: i64 = sqlx::query_scalar(
             "insert into tournament (name, repeats, created_at) values ($1, $2, $3) returning tournament_id",
