@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs every benchmark and writes BENCHMARKS.md (date, machine, commit, then one section
-# a benchmark, each figure beside its floor or baseline measured in the same run).
+# a benchmark, each figure beside its floor or baseline measured in the same run). The
+# whole file is this script's: the analysis of the figures, with earlier runs' figures
+# (dated), lives in docs/PERFORMANCE.md.
 #
 #   bash benches/run.sh            (about 30 minutes on 2 cores)
 #   bash benches/run.sh --quick    (a few minutes: fewer runs, smaller databases and
@@ -15,10 +17,10 @@ cd "$(dirname "$0")/.."
 QUICK=${1:-}
 if [ "$QUICK" = --quick ]; then
   RUNS=3 STEP_RUNS=3 PAGE_SIZES="1000" PAGE_RUNS=5 EVERY=17 T_RUNS=1 OVERHEAD=5
-  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1 WORKER_ARGS=(1 2)
+  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1 WORKER_ARGS=(1 2) IDLE_ARGS=(1 2) CLAIM_RUNS=20
 else
   RUNS=5 STEP_RUNS=11 PAGE_SIZES="1000 100000 1000000" PAGE_RUNS=21 EVERY=1 T_RUNS=3 OVERHEAD=20
-  HTTP_ARGS=() ADAPTER_RUNS=11 WORKER_ARGS=(3 12)
+  HTTP_ARGS=() ADAPTER_RUNS=11 WORKER_ARGS=(3 12) IDLE_ARGS=(3 5) CLAIM_RUNS=200
 fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
@@ -122,6 +124,23 @@ log "the sandbox's cost per match"
 log "HTTP under load"
 { bash benches/http.sh "${HTTP_ARGS[@]}"; echo; } >>"$out"
 
+log "idle connections"
+{
+  echo "## With 1,000 idle connections open"
+  echo
+  echo "\`bash benches/idle.sh ${IDLE_ARGS[*]}\`: \`GET /healthz\` and \`GET /api/leaderboard?scope=all\` on a"
+  echo "fresh server (SQLite, the default mazes, one match worker), wrk \`-t 2 -c 32\` from 127.0.0.1,"
+  echo "without and then with 1,000 idle connections held open from 127.0.0.2-127.0.0.5 (250 each,"
+  echo "under the per-address cap; each sent half a request line and is opened again when the"
+  echo "server closes it at its 10 s head timeout), in turn in one run:"
+  echo
+  bash benches/idle.sh "${IDLE_ARGS[@]}"
+  echo
+} >>"$out"
+
+log "the fair claim"
+{ python3 benches/claim.py "$CLAIM_RUNS"; echo; } >>"$out"
+
 log "ranking throughput"
 {
   echo "## Ranking throughput in a competition"
@@ -177,6 +196,14 @@ log "bytes per stored match"
   echo
   bash benches/storage.sh "$EVERY" | sed 's/^/    /'
   echo
+} >>"$out"
+
+{
+  echo "## Reading these figures"
+  echo
+  echo "Where a match's time goes in the sandbox, what was changed for it and what was tried"
+  echo "and dropped, with the figures of earlier runs (each dated, with its commit), is in"
+  echo "docs/PERFORMANCE.md."
 } >>"$out"
 
 mv "$out" BENCHMARKS.md

@@ -338,7 +338,7 @@ impl MatchCgroup {
     /// thread group, whose writer waits out an RCU grace period: 10-20 ms a match on the
     /// project's machine. Moving the writing thread alone through `tasks` skips that
     /// lock (0.06 ms), and a process of one thread is then wholly in the cgroup
-    /// (BENCHMARKS.md, "The sandbox's cost per match").
+    /// (docs/PERFORMANCE.md).
     pub fn join_files(&self) -> Vec<PathBuf> {
         let file = match self.version {
             CgroupRoot::V1 { .. } => "tasks",

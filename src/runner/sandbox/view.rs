@@ -533,7 +533,7 @@ pub fn bwrap_args(
         // The folder is mounted once, read-only, and each of its entries is a link to it
         // in the (writable) working directory: one mount a match rather than one an
         // entry, each of which bubblewrap pays for by reading the whole mount table
-        // (BENCHMARKS.md, "The sandbox's cost per match"). An entry that is itself a
+        // (docs/PERFORMANCE.md). An entry that is itself a
         // link (a local run's) is mounted as before, so that it reaches what it names;
         // so is every entry of a folder the match's own uid may not pass through (a
         // local run's private folder).

@@ -1,6 +1,6 @@
 //! Warm sandboxes: a sandbox kept for many matches of a worker slot, so that a match does
 //! not pay for bubblewrap, the view's mounts, a network namespace and a cgroup of its own
-//! (BENCHMARKS.md, "The sandbox's cost per match").
+//! (docs/PERFORMANCE.md).
 //!
 //! A warm sandbox is bubblewrap with a match's view, minus the bot's folder and scratch
 //! area, running the supervisor ([`super::supervisor`]) in a cgroup of its own. Each
