@@ -74,20 +74,21 @@ impl Storage {
     /// The standings, best mean score first (ties: higher finish rate, then name), read
     /// from the running sums of the `standing` table (kept by triggers on `match`): two
     /// rows per bot version (hidden and public mazes) for the whole ranking, a few per
-    /// tournament, however many matches there are.
+    /// tournament, however many matches and tournaments there are.
     ///
     /// # Errors
     /// Database failures.
     pub async fn leaderboard(&self, scope: Scope) -> Result<Vec<Standing>> {
         let filter = match scope {
             Scope::Tournament(_) => "s.tournament_id = $1",
+            // The ranking's own sums (tournament -1: every match outside a
+            // competition's tournaments, migration 0014): a few rows per bot version,
+            // however many tournaments there are.
             Scope::Ranking => {
-                "s.tournament_id >= 0 and s.tournament_id not in (select tournament_id from tournament where competition_id is not null)
-                 and s.hidden = 1 and cast($1 as bigint) is null and v.version = b.latest"
+                "s.tournament_id = -1 and s.hidden = 1 and cast($1 as bigint) is null and v.version = b.latest"
             }
             Scope::All => {
-                "s.tournament_id >= 0 and s.tournament_id not in (select tournament_id from tournament where competition_id is not null)
-                 and cast($1 as bigint) is null and v.version = b.latest"
+                "s.tournament_id = -1 and cast($1 as bigint) is null and v.version = b.latest"
             }
         };
         let sql = format!(

@@ -11,7 +11,7 @@ use reqwest::Method;
 use serde_json::{Value, json};
 
 use crate::faults::{new_database, postgres};
-use crate::support::{ADMIN, TestServer, simple_bot_files};
+use crate::support::{ADMIN, TestServer, assert_standings_equal_recount, simple_bot_files};
 
 /// The competition opens this long after the test creates it.
 const OPENS_IN_MS: i64 = 3000;
@@ -688,6 +688,9 @@ async fn play_a_competition(server: &TestServer) {
         list["items"][0]["limits"]["move_timeout_ms"], 2000,
         "{list}"
     );
+    // The ranking's running sums leave out the competition's tournaments, as the
+    // count from the match table does; each of its tournaments has its own.
+    assert_standings_equal_recount(&server.database, &[public_t, private_t]).await;
 }
 
 /// A standing line states its uncertainty: an interval that holds `mean`, and a rank
