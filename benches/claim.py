@@ -51,13 +51,13 @@ def add_owners(db):
     now = int(time.time() * 1000)
     version = db.execute(
         "select bot_version_id from bot_version where build_status = 'ready' limit 1").fetchone()[0]
+    cols = [r[1] for r in db.execute("pragma table_info(bot_version)")
+            if r[1] not in ("bot_version_id", "bot_id")]
     versions = []
     for i in range(OWNERS):
         bot = db.execute(
             "insert into bot (name, owner_token_hash, created_at) values (?, ?, ?)",
             (f"claim-bench-{i}", f"{i:064x}", now)).lastrowid
-        cols = [r[1] for r in db.execute("pragma table_info(bot_version)")
-                if r[1] not in ("bot_version_id", "bot_id")]
         db.execute(
             f"insert into bot_version (bot_id, {', '.join(cols)}) "
             f"select ?, {', '.join(cols)} from bot_version where bot_version_id = ?",
