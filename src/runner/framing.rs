@@ -1,9 +1,13 @@
 //! Reading a bot's pipes safely: reply lines with a length cap, and a bounded stderr tail.
+//!
+//! Both readers take bytes two ways: awaited through the runtime (a bot that thinks),
+//! or by a read made at once on the pipe that `ppoll` just found ready (the match's
+//! fast wait, [`super::session`]): the same buffers, so a line may come partly each way.
 
 use std::collections::VecDeque;
+use std::os::fd::AsFd;
 
 use tokio::io::{AsyncRead, AsyncReadExt};
-use tokio_util::codec::{AnyDelimiterCodec, AnyDelimiterCodecError, FramedRead};
 
 use crate::protocol::MAX_LINE_BYTES;
 
@@ -59,16 +63,8 @@ impl<R: AsyncRead + Unpin> StderrReader<R> {
     /// Waits until the pipe holds bytes (or ends), then takes in one read of them.
     /// Cancel safe: dropped before it completes, it has read nothing.
     pub async fn read_some(&mut self) {
-        match self.stream.read(&mut self.buf).await {
-            Ok(0) | Err(_) => {
-                self.open = false;
-                self.splitter.finish();
-            }
-            Ok(n) => {
-                self.tail.push(&self.buf[..n]);
-                self.splitter.push(&self.buf[..n]);
-            }
-        }
+        let read = self.stream.read(&mut self.buf).await;
+        self.take_in(read);
     }
 
     /// Waits for `event` while reading the stderr, taking in every stderr byte the
@@ -116,6 +112,42 @@ impl<R: AsyncRead + Unpin> StderrReader<R> {
             tail.push_str("\n[stderr could not be read to its end]");
         }
         (tail, self.splitter.lines)
+    }
+}
+
+impl<R> StderrReader<R> {
+    /// Whether the pipe may still hold bytes (its end was not read yet).
+    pub fn is_open(&self) -> bool {
+        self.open
+    }
+
+    fn take_in(&mut self, read: std::io::Result<usize>) {
+        match read {
+            Ok(0) | Err(_) => {
+                self.open = false;
+                self.splitter.finish();
+            }
+            Ok(n) => {
+                self.tail.push(&self.buf[..n]);
+                self.splitter.push(&self.buf[..n]);
+            }
+        }
+    }
+}
+
+impl<R: AsFd> StderrReader<R> {
+    /// The pipe, for a wait on it.
+    pub fn pipe(&self) -> std::os::fd::BorrowedFd<'_> {
+        self.stream.as_fd()
+    }
+
+    /// Takes in one read of the pipe made now, past the runtime: for a pipe just found
+    /// ready (a read that would block reads nothing).
+    pub fn read_now(&mut self) {
+        match nix::unistd::read(self.stream.as_fd(), &mut self.buf) {
+            Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => {}
+            read => self.take_in(read.map_err(std::io::Error::from)),
+        }
     }
 }
 
@@ -179,33 +211,187 @@ impl LineSplitter {
 /// The most stderr reads in a row (8 KiB each) before an awaited event that is ready
 /// (a reply, the bot's exit) is taken in anyway: a bot that writes stderr without end
 /// cannot hold its own answer back.
-const STDERR_READS_BEFORE_REPLY: u32 = 64;
+pub const STDERR_READS_BEFORE_REPLY: u32 = 64;
 
-/// The bot's next reply line (`None` at the end of its stdout), once every stderr byte
-/// the bot wrote before it has been read into `stderr` (see
-/// [`StderrReader::drain_while`]). Cancel safe.
+/// Waits until the bot's stdout holds a reply line (or ends, or holds too long a line),
+/// reading every stderr byte the bot wrote before it into `stderr` meanwhile (see
+/// [`StderrReader::drain_while`]); then [`ReplyReader::line`] has the line. Cancel safe.
 pub async fn next_reply<O, E>(
     replies: &mut ReplyReader<O>,
     stderr: &mut StderrReader<E>,
-) -> Option<Result<tokio_util::bytes::Bytes, AnyDelimiterCodecError>>
+) -> std::io::Result<Next>
 where
     O: AsyncRead + Unpin,
     E: AsyncRead + Unpin,
 {
-    use futures_util::StreamExt;
     stderr.drain_while(replies.next()).await
 }
 
-/// A line reader over the bot's stdout that never buffers more than one capped line.
-pub type ReplyReader<R> = FramedRead<R, AnyDelimiterCodec>;
+/// What a bot's stdout holds next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Next {
+    /// A whole line: [`ReplyReader::line`].
+    Line,
+    /// More than [`MAX_LINE_BYTES`] before a newline: [`ReplyReader::partial`] has them.
+    TooLong,
+    /// The end of the stream, every line handed on.
+    End,
+    /// Nothing whole yet: more must be read.
+    More,
+}
 
-/// Wraps a bot's stdout in a reader of "\n"-ended lines of at most
-/// [`MAX_LINE_BYTES`] bytes.
-pub fn reply_reader<R: AsyncRead>(stdout: R) -> ReplyReader<R> {
-    FramedRead::new(
-        stdout,
-        AnyDelimiterCodec::new_with_max_length(b"\n".to_vec(), Vec::new(), MAX_LINE_BYTES),
-    )
+/// The bot's reply lines: "\n"-ended lines of at most [`MAX_LINE_BYTES`] bytes (at the
+/// end of the stream, the last bytes without a newline make a line too), read into one
+/// buffer that never holds more than one line over the cap.
+#[derive(Debug)]
+pub struct ReplyReader<R> {
+    stream: R,
+    lines: Lines,
+}
+
+impl<R> ReplyReader<R> {
+    /// Reads reply lines from `stdout`.
+    pub fn new(stdout: R) -> Self {
+        ReplyReader {
+            stream: stdout,
+            lines: Lines {
+                buf: vec![0u8; REPLY_BUFFER_BYTES].into_boxed_slice(),
+                start: 0,
+                end: 0,
+                scanned: 0,
+                line_end: None,
+                eof: false,
+            },
+        }
+    }
+
+    /// What the bytes read so far hold next (a line handed on before is dropped first).
+    pub fn look(&mut self) -> Next {
+        self.lines.look()
+    }
+
+    /// The line the last [`ReplyReader::look`] found, without its newline.
+    pub fn line(&self) -> &[u8] {
+        let l = &self.lines;
+        l.line_end.map_or(&[], |end| &l.buf[l.start..end])
+    }
+
+    /// The bytes read and not yet handed on (a line too long, for the record).
+    pub fn partial(&self) -> &[u8] {
+        &self.lines.buf[self.lines.start..self.lines.end]
+    }
+}
+
+impl<R: AsyncRead + Unpin> ReplyReader<R> {
+    /// Waits for what the stream holds next (never [`Next::More`]). Cancel safe.
+    pub async fn next(&mut self) -> std::io::Result<Next> {
+        loop {
+            match self.lines.look() {
+                Next::More => {}
+                next => return Ok(next),
+            }
+            let n = self.stream.read(self.lines.room()).await?;
+            self.lines.took(n);
+        }
+    }
+}
+
+impl<R: AsFd> ReplyReader<R> {
+    /// The pipe, for a wait on it.
+    pub fn pipe(&self) -> std::os::fd::BorrowedFd<'_> {
+        self.stream.as_fd()
+    }
+
+    /// Takes in one read of the pipe made now, past the runtime: for a pipe just found
+    /// ready (a read that would block reads nothing). Call it only after
+    /// [`ReplyReader::look`] said [`Next::More`].
+    ///
+    /// # Errors
+    /// The read failed.
+    pub fn read_now(&mut self) -> std::io::Result<()> {
+        match nix::unistd::read(self.stream.as_fd(), self.lines.room()) {
+            Ok(n) => self.lines.took(n),
+            Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => {}
+            Err(e) => return Err(e.into()),
+        }
+        Ok(())
+    }
+}
+
+/// The least room a reply buffer leaves for a read.
+const READ_BYTES: usize = 16 * 1024;
+
+/// How much a reply buffer holds: a line over the cap, and room for one more read.
+const REPLY_BUFFER_BYTES: usize = MAX_LINE_BYTES + 1 + READ_BYTES;
+
+/// A [`ReplyReader`]'s buffer: the bytes read from `start` to `end`.
+#[derive(Debug)]
+struct Lines {
+    buf: Box<[u8]>,
+    /// The first byte not yet handed on.
+    start: usize,
+    /// The end of the bytes read.
+    end: usize,
+    /// How far past `start` a newline has been looked for.
+    scanned: usize,
+    /// The end of the line handed on by the last `look` (from `start`).
+    line_end: Option<usize>,
+    /// The stream ended.
+    eof: bool,
+}
+
+impl Lines {
+    fn look(&mut self) -> Next {
+        self.drop_line();
+        let read_to = self.end.min(self.start + MAX_LINE_BYTES + 1);
+        let from = self.start + self.scanned;
+        if let Some(i) = self.buf[from..read_to].iter().position(|&b| b == b'\n') {
+            self.line_end = Some(from + i);
+            return Next::Line;
+        }
+        if self.end - self.start > MAX_LINE_BYTES {
+            return Next::TooLong;
+        }
+        self.scanned = read_to - self.start;
+        if !self.eof {
+            return Next::More;
+        }
+        if self.end > self.start {
+            // The last bytes, without a newline.
+            self.line_end = Some(self.end);
+            return Next::Line;
+        }
+        Next::End
+    }
+
+    fn drop_line(&mut self) {
+        if let Some(end) = self.line_end.take() {
+            self.start = (end + 1).min(self.end);
+            self.scanned = 0;
+        }
+    }
+
+    /// Room for the next read, after moving what is kept to the front when it is
+    /// needed. Never empty after `look` said [`Next::More`]: the buffer holds a line
+    /// over the cap and a read more.
+    fn room(&mut self) -> &mut [u8] {
+        self.drop_line();
+        if self.start == self.end {
+            (self.start, self.end) = (0, 0);
+        } else if self.buf.len() - self.end < READ_BYTES {
+            self.buf.copy_within(self.start..self.end, 0);
+            (self.end, self.start) = (self.end - self.start, 0);
+        }
+        &mut self.buf[self.end..]
+    }
+
+    /// Counts `read` more bytes in the room (none: the end of the stream).
+    fn took(&mut self, read: usize) {
+        if read == 0 {
+            self.eof = true;
+        }
+        self.end += read;
+    }
 }
 
 /// The last bytes of a stream, up to a cap, and how many came in all.
@@ -275,7 +461,17 @@ mod tests {
             1
         );
     }
-    use futures_util::StreamExt;
+    /// The next line of `r`, `None` at the end; a line too long is an error.
+    async fn next_line<R: AsyncRead + Unpin>(
+        r: &mut ReplyReader<R>,
+    ) -> Option<Result<Vec<u8>, ()>> {
+        match r.next().await.unwrap() {
+            Next::Line => Some(Ok(r.line().to_vec())),
+            Next::TooLong => Some(Err(())),
+            Next::End => None,
+            Next::More => unreachable!("next waits for more"),
+        }
+    }
 
     #[tokio::test]
     async fn lines_split_across_reads_are_joined() {
@@ -290,14 +486,17 @@ mod tests {
                 tx.write_all(chunk).await.unwrap();
             }
         });
-        let mut r = reply_reader(rx);
+        let mut r = ReplyReader::new(rx);
         assert_eq!(
-            &r.next().await.unwrap().unwrap()[..],
+            next_line(&mut r).await.unwrap().unwrap(),
             b"{\"rotation\":0,\"movement\":1}"
         );
-        assert_eq!(&r.next().await.unwrap().unwrap()[..], b"{\"reset\":true}");
+        assert_eq!(
+            next_line(&mut r).await.unwrap().unwrap(),
+            b"{\"reset\":true}"
+        );
         writer.await.unwrap();
-        assert!(r.next().await.is_none());
+        assert!(next_line(&mut r).await.is_none());
     }
 
     #[tokio::test]
@@ -312,9 +511,9 @@ mod tests {
                 }
             }
         });
-        let mut r = reply_reader(rx);
-        assert!(r.next().await.unwrap().is_err());
-        assert!(r.read_buffer().len() <= 2 * MAX_LINE_BYTES + 64 * 1024);
+        let mut r = ReplyReader::new(rx);
+        assert!(next_line(&mut r).await.unwrap().is_err());
+        assert!(r.partial().len() <= MAX_LINE_BYTES + 1 + READ_BYTES);
         drop(r);
         writer.await.unwrap();
     }
@@ -323,12 +522,15 @@ mod tests {
     async fn a_line_of_exactly_64_kib_is_accepted() {
         let mut data = vec![b' '; MAX_LINE_BYTES];
         data.push(b'\n');
-        let mut r = reply_reader(&data[..]);
-        assert_eq!(r.next().await.unwrap().unwrap().len(), MAX_LINE_BYTES);
+        let mut r = ReplyReader::new(&data[..]);
+        assert_eq!(
+            next_line(&mut r).await.unwrap().unwrap().len(),
+            MAX_LINE_BYTES
+        );
         let mut data = vec![b' '; MAX_LINE_BYTES + 1];
         data.push(b'\n');
-        let mut r = reply_reader(&data[..]);
-        assert!(r.next().await.unwrap().is_err());
+        let mut r = ReplyReader::new(&data[..]);
+        assert!(next_line(&mut r).await.unwrap().is_err());
     }
 
     #[tokio::test]
@@ -371,7 +573,7 @@ mod tests {
         let (err_tx, err_rx) = tokio::net::unix::pipe::pipe().unwrap();
         (
             out_tx,
-            reply_reader(out_rx),
+            ReplyReader::new(out_rx),
             err_tx,
             StderrReader::new(err_rx, 1_000_000, false),
         )
@@ -392,11 +594,11 @@ mod tests {
             }
             let answer = format!("answer {step}\n");
             nix::unistd::write(&out, answer.as_bytes()).unwrap();
-            let got = next_reply(&mut replies, &mut stderr)
-                .await
-                .unwrap()
-                .unwrap();
-            assert_eq!(&got[..], format!("answer {step}").as_bytes());
+            assert_eq!(
+                next_reply(&mut replies, &mut stderr).await.unwrap(),
+                Next::Line
+            );
+            assert_eq!(replies.line(), format!("answer {step}").as_bytes());
             let want: Vec<String> = (0..step % 3)
                 .map(|l| format!("step {step} line {l}"))
                 .collect();
@@ -416,11 +618,11 @@ mod tests {
             assert_eq!(nix::unistd::write(&err, &chunk).unwrap(), chunk.len());
         }
         nix::unistd::write(&out, b"answer\n").unwrap();
-        let got = next_reply(&mut replies, &mut stderr)
-            .await
-            .unwrap()
-            .unwrap();
-        assert_eq!(&got[..], b"answer");
+        assert_eq!(
+            next_reply(&mut replies, &mut stderr).await.unwrap(),
+            Next::Line
+        );
+        assert_eq!(replies.line(), b"answer");
         let read = STDERR_READS_BEFORE_REPLY as u64 * stderr.buf.len() as u64;
         assert!(read < mib as u64);
         assert_eq!(stderr.tail.total, read);

@@ -92,27 +92,62 @@ pub enum LimitKind {
     Scratch,
 }
 
-/// What the runner writes the bot's stdin through.
-pub type BotStdin = Box<dyn tokio::io::AsyncWrite + Send + Unpin>;
+/// What the runner writes the bot's stdin through: a pipe, which the match may also
+/// write at once, past the runtime.
+pub type BotStdin = tokio::net::unix::pipe::Sender;
 
-/// What the runner reads the bot's stdout or stderr through.
-pub type BotOutput = Box<dyn tokio::io::AsyncRead + Send + Unpin>;
+/// What the runner reads the bot's stdout or stderr through: a pipe, which the match
+/// may also wait on and read at once, past the runtime.
+pub type BotOutput = tokio::net::unix::pipe::Receiver;
 
 /// How the bot's processes were started.
+#[derive(Debug)]
 enum Started {
     /// A child of the runner: the bot itself, or a one-shot sandbox (bubblewrap).
     Child(Child),
-    /// A match in a warm sandbox, with the runner's ends of its pipes until taken.
-    Warm(Box<WarmMatch>, Option<(BotStdin, BotOutput, BotOutput)>),
+    /// A match in a warm sandbox.
+    Warm(Box<WarmMatch>),
 }
 
-impl std::fmt::Debug for Started {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Started::Child(child) => f.debug_tuple("Child").field(child).finish(),
-            Started::Warm(warm, _) => f.debug_tuple("Warm").field(warm).finish(),
-        }
+/// The three pipes of a bot: its ends (for the process to start) and ours.
+struct Pipes {
+    stdin_bot: std::os::fd::OwnedFd,
+    stdout_bot: std::os::fd::OwnedFd,
+    stderr_bot: std::os::fd::OwnedFd,
+    stdin_ours: std::os::fd::OwnedFd,
+    stdout_ours: std::os::fd::OwnedFd,
+    stderr_ours: std::os::fd::OwnedFd,
+}
+
+impl Pipes {
+    fn new() -> nix::Result<Pipes> {
+        let pipe = || nix::unistd::pipe2(nix::fcntl::OFlag::O_CLOEXEC);
+        let (stdin_bot, stdin_ours) = pipe()?;
+        let (stdout_ours, stdout_bot) = pipe()?;
+        let (stderr_ours, stderr_bot) = pipe()?;
+        Ok(Pipes {
+            stdin_bot,
+            stdout_bot,
+            stderr_bot,
+            stdin_ours,
+            stdout_ours,
+            stderr_ours,
+        })
     }
+}
+
+/// Our ends of a bot's pipes, registered with the runtime.
+fn our_ends(
+    stdin: std::os::fd::OwnedFd,
+    stdout: std::os::fd::OwnedFd,
+    stderr: std::os::fd::OwnedFd,
+) -> std::io::Result<(BotStdin, BotOutput, BotOutput)> {
+    use tokio::net::unix::pipe::{Receiver, Sender};
+    Ok((
+        Sender::from_owned_fd(stdin)?,
+        Receiver::from_owned_fd(stdout)?,
+        Receiver::from_owned_fd(stderr)?,
+    ))
 }
 
 /// A running bot: its processes and everything that bounds and measures them.
@@ -120,6 +155,8 @@ impl std::fmt::Debug for Started {
 #[derive(Debug)]
 pub struct BotProcess {
     started: Started,
+    /// The runner's ends of the bot's stdin, stdout and stderr, until taken.
+    stdio: Option<(BotStdin, BotOutput, BotOutput)>,
     /// The outer process's pid, also its process group id (in a warm sandbox: the
     /// match's init).
     pub pid: Option<u32>,
@@ -193,9 +230,10 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
             (Command::from(cmd), cgroup, uid)
         }
     };
-    cmd.stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
+    let pipes = Pipes::new().map_err(|e| LaunchError::Sandbox(format!("pipe: {e}")))?;
+    cmd.stdin(Stdio::from(pipes.stdin_bot))
+        .stdout(Stdio::from(pipes.stdout_bot))
+        .stderr(Stdio::from(pipes.stderr_bot))
         .process_group(0)
         .kill_on_drop(true);
     let per_process = match launch.sandbox {
@@ -211,12 +249,18 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
         dir: launch.dir.display().to_string(),
         source,
     })?;
+    // The command holds the bot's ends of its pipes: closed here, so that the bot's
+    // exit ends its stdout.
+    drop(cmd);
     if let Some(pid) = child.id() {
         set_limits(pid, per_process);
     }
+    let stdio = our_ends(pipes.stdin_ours, pipes.stdout_ours, pipes.stderr_ours)
+        .map_err(|e| LaunchError::Sandbox(format!("the bot's pipes: {e}")))?;
     Ok(BotProcess {
         pid: child.id(),
         started: Started::Child(child),
+        stdio: Some(stdio),
         cgroup,
         _uid: uid,
         sandboxed: matches!(launch.sandbox, Sandbox::Full(_)),
@@ -264,13 +308,7 @@ fn spawn_warm(
     uid: Option<UidLease>,
 ) -> Result<BotProcess, LaunchError> {
     let sandbox_error = LaunchError::Sandbox;
-    let pipe = || {
-        nix::unistd::pipe2(nix::fcntl::OFlag::O_CLOEXEC)
-            .map_err(|e| sandbox_error(format!("pipe: {e}")))
-    };
-    let (stdin_bot, stdin_ours) = pipe()?;
-    let (stdout_ours, stdout_bot) = pipe()?;
-    let (stderr_ours, stderr_bot) = pipe()?;
+    let pipes = Pipes::new().map_err(|e| sandbox_error(format!("pipe: {e}")))?;
     let request = supervisor::Request {
         scratch_bytes: launch.scratch_bytes,
         jail: jail_args(launch, words, uid.as_ref(), true)
@@ -292,22 +330,18 @@ fn spawn_warm(
         &request,
         launch.dir,
         warm::MatchStdio {
-            stdin: stdin_bot,
-            stdout: stdout_bot,
-            stderr: stderr_bot,
+            stdin: pipes.stdin_bot,
+            stdout: pipes.stdout_bot,
+            stderr: pipes.stderr_bot,
         },
     )
     .map_err(sandbox_error)?;
-    let io = |e: std::io::Error| sandbox_error(format!("the bot's pipes: {e}"));
-    let stdin: BotStdin =
-        Box::new(tokio::net::unix::pipe::Sender::from_owned_fd(stdin_ours).map_err(io)?);
-    let stdout: BotOutput =
-        Box::new(tokio::net::unix::pipe::Receiver::from_owned_fd(stdout_ours).map_err(io)?);
-    let stderr: BotOutput =
-        Box::new(tokio::net::unix::pipe::Receiver::from_owned_fd(stderr_ours).map_err(io)?);
+    let stdio = our_ends(pipes.stdin_ours, pipes.stdout_ours, pipes.stderr_ours)
+        .map_err(|e| sandbox_error(format!("the bot's pipes: {e}")))?;
     Ok(BotProcess {
         pid: Some(warm.init_pid),
-        started: Started::Warm(Box::new(warm), Some((stdin, stdout, stderr))),
+        started: Started::Warm(Box::new(warm)),
+        stdio: Some(stdio),
         cgroup: None,
         _uid: uid,
         sandboxed: true,
@@ -397,15 +431,7 @@ fn direct(launch: &Launch<'_>, words: &[String]) -> Command {
 impl BotProcess {
     /// The runner's ends of the bot's stdin, stdout and stderr (once).
     pub fn take_stdio(&mut self) -> Option<(BotStdin, BotOutput, BotOutput)> {
-        match &mut self.started {
-            Started::Child(child) => {
-                let stdin: BotStdin = Box::new(child.stdin.take()?);
-                let stdout: BotOutput = Box::new(child.stdout.take()?);
-                let stderr: BotOutput = Box::new(child.stderr.take()?);
-                Some((stdin, stdout, stderr))
-            }
-            Started::Warm(_, stdio) => stdio.take(),
-        }
+        self.stdio.take()
     }
 
     /// Waits for the outer process to end: its exit status.
@@ -415,14 +441,14 @@ impl BotProcess {
     pub async fn wait(&mut self) -> std::io::Result<std::process::ExitStatus> {
         match &mut self.started {
             Started::Child(child) => child.wait().await,
-            Started::Warm(warm, _) => warm.wait().await,
+            Started::Warm(warm) => warm.wait().await,
         }
     }
 
     /// The match's cgroup, if it has one.
     fn cgroup(&self) -> Option<&MatchCgroup> {
         match &self.started {
-            Started::Warm(warm, _) => warm.cgroup(),
+            Started::Warm(warm) => warm.cgroup(),
             Started::Child(_) => self.cgroup.as_ref(),
         }
     }
@@ -483,7 +509,7 @@ impl BotProcess {
             // In a warm sandbox the match's init holds the scratch area; in a one-shot
             // one, bubblewrap's process inside.
             let inner = match &self.started {
-                Started::Warm(warm, _) => Some(warm.init_pid),
+                Started::Warm(warm) => Some(warm.init_pid),
                 Started::Child(_) => self
                     .pid
                     .map(proctree::members)
@@ -509,7 +535,7 @@ impl BotProcess {
         // A warm sandbox's cgroup holds the sandbox too, and its init's pid is not the
         // runner's child: the match goes with its init, killed through its pidfd (never
         // by a pid that may have been reused), and takes its PID namespace with it.
-        if let Started::Warm(warm, _) = &self.started {
+        if let Started::Warm(warm) = &self.started {
             warm.kill();
             return;
         }

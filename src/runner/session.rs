@@ -2,11 +2,13 @@
 //! time, end it. [`Session::exchange`] returns a [`Verdict`] per step, so the match loop
 //! in [`super::run_match`] stays a short loop over verdicts.
 
+use std::pin::Pin;
 use std::time::{Duration, Instant};
+
+use std::os::fd::AsFd;
 
 use tokio::io::AsyncWriteExt;
 use tokio::time::timeout_at;
-use tokio_util::codec::AnyDelimiterCodecError;
 
 use super::framing;
 use super::outcome::{Failure, LimitHit, MatchStatus};
@@ -18,6 +20,19 @@ use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
 
 /// How often the whole-match limits are looked at while the bot thinks.
 const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
+
+/// How long an answer is waited for on the match's own thread, in `ppoll` on the bot's
+/// stdout and stderr, before the wait goes to the runtime. Most answers come within
+/// it: a step then costs the referee its four system calls (the sense's `write`, the
+/// wait, the answer's `read`, the CPU counter) and little else, where a wait through
+/// the runtime's reactor costs some 4,000 instructions more (docs/PERFORMANCE.md).
+/// Each match has a thread of its own ([`crate::worker`], `mazearena run`), so the
+/// wait holds up nothing else for long.
+const NEAR_WAIT: Duration = Duration::from_millis(2);
+
+/// The longest a match keeps its thread from the runtime's other tasks (a worker's
+/// lease renewal, a shutdown) while every answer comes within [`NEAR_WAIT`].
+const TURN_EVERY: Duration = Duration::from_millis(10);
 
 /// Added to a timeout at step 1: the usual cause is an answer left in an output buffer.
 pub const STARTUP_HINT: &str = " (if the bot did print an answer, it may still sit in its output buffer: \
@@ -65,6 +80,26 @@ pub struct Session {
     limits: Limits,
     cpu_mark: Option<u64>,
     watchdog: tokio::time::Interval,
+    /// The time limit of the step being asked, for a wait through the runtime: one
+    /// timer for the whole match, moved to each step's deadline (a timer made per step
+    /// costs its registration each time).
+    step_limit: Pin<Box<tokio::time::Sleep>>,
+    /// When the whole-match limits are next looked at by a wait on the match's thread.
+    watch_at: Instant,
+    /// When the runtime last had a turn.
+    turned_at: Instant,
+}
+
+/// How a wait on the match's own thread ended.
+enum NearWait {
+    /// The reply pipe holds what is next (or could not be read).
+    Got(std::io::Result<framing::Next>),
+    /// The step's deadline passed.
+    TimedOut,
+    /// A whole-match limit was hit.
+    Limit(LimitKind),
+    /// Nothing yet: wait through the runtime.
+    Later,
 }
 
 impl Session {
@@ -93,12 +128,15 @@ impl Session {
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         Ok(Session {
             stderr: framing::StderrReader::new(stderr, framing::STDERR_TAIL_BYTES, echo_stderr),
-            replies: framing::reply_reader(stdout),
+            replies: framing::ReplyReader::new(stdout),
             stdin,
             started,
             limits,
             cpu_mark: Some(0),
             watchdog,
+            step_limit: Box::pin(tokio::time::sleep_until(started.into())),
+            watch_at: started + WATCHDOG_PERIOD,
+            turned_at: started,
             process,
         })
     }
@@ -129,7 +167,15 @@ impl Session {
 
     /// Asks the bot for one step and waits for its answer under the time limit, looking
     /// at the whole-match limits meanwhile.
+    ///
+    /// The sense is written and the answer waited for on the match's thread first
+    /// ([`NEAR_WAIT`]), then through the runtime; either way every stderr byte the bot
+    /// wrote before its answer is read before the answer.
     pub async fn exchange(&mut self, sense: &Sense) -> Verdict {
+        if self.turned_at.elapsed() >= TURN_EVERY {
+            tokio::task::yield_now().await;
+            self.turned_at = Instant::now();
+        }
         let sent_at = Instant::now();
         // PROTOCOL-v1: the first answer is timed from the process start.
         let (since, limit) = if sense.step == 1 {
@@ -137,30 +183,37 @@ impl Session {
         } else {
             (sent_at, self.limits.move_timeout)
         };
-        let deadline: Option<tokio::time::Instant> = limit.map(|l| (since + l).into());
-        if let Err(e) = send(&mut self.stdin, &ServerMessage::sense(sense), deadline).await {
+        let deadline = limit.map(|l| since + l);
+        let line = ServerMessage::sense(sense).to_line();
+        if let Err(e) = self.send_sense(line.as_bytes(), deadline).await {
             let (status, failure) = write_failure(e, sense.step);
             return self.limit_or(Verdict::Fault(status, failure), sense.step);
         }
-        let next = loop {
-            let reply = framing::next_reply(&mut self.replies, &mut self.stderr);
-            let read = async {
-                match deadline {
-                    Some(d) => timeout_at(d, reply).await,
-                    None => Ok(reply.await),
+        let next = match self.wait_near(deadline) {
+            NearWait::Got(next) => Ok(next),
+            NearWait::TimedOut => Err(()),
+            NearWait::Limit(kind) => return self.limit_fault(kind, sense.step),
+            NearWait::Later => {
+                if let Some(d) = deadline {
+                    self.step_limit.as_mut().reset(d.into());
                 }
-            };
-            tokio::select! {
-                r = read => break r,
-                _ = self.watchdog.tick() => {
-                    if let Some(kind) = self.process.limit_hit() {
-                        return self.limit_fault(kind, sense.step);
+                self.turned_at = Instant::now();
+                loop {
+                    tokio::select! {
+                        biased;
+                        r = framing::next_reply(&mut self.replies, &mut self.stderr) => break Ok(r),
+                        () = self.step_limit.as_mut(), if deadline.is_some() => break Err(()),
+                        _ = self.watchdog.tick() => {
+                            if let Some(kind) = self.process.limit_hit() {
+                                return self.limit_fault(kind, sense.step);
+                            }
+                        }
                     }
                 }
             }
         };
-        let line = match next {
-            Err(_) => {
+        match next {
+            Err(()) => {
                 let what = if sense.step == 1 { "startup" } else { "move" };
                 let ms = limit.map_or(0, |l| l.as_millis());
                 let mut reason = format!(
@@ -170,25 +223,102 @@ impl Session {
                 if sense.step == 1 {
                     reason.push_str(STARTUP_HINT);
                 }
-                return self.fault_or_limit(MatchStatus::Timeout, reason, sense.step);
+                self.fault_or_limit(MatchStatus::Timeout, reason, sense.step)
             }
-            Ok(None) => {
+            Ok(Ok(framing::Next::Line)) => self.answer(since, sense.step),
+            Ok(Ok(framing::Next::End | framing::Next::More)) => {
                 let reason = format!(
                     "the bot closed its stdout (or exited) before answering step {}",
                     sense.step
                 );
-                return self.fault_or_limit(MatchStatus::Crashed, reason, sense.step);
+                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
             }
-            Ok(Some(Err(AnyDelimiterCodecError::MaxChunkLengthExceeded))) => {
-                let line = self.replies.read_buffer().to_vec();
-                return protocol_fault(ProtocolError::LineTooLong, &line, sense.step);
-            }
-            Ok(Some(Err(AnyDelimiterCodecError::Io(e)))) => {
+            Ok(Ok(framing::Next::TooLong)) => protocol_fault(
+                ProtocolError::LineTooLong,
+                self.replies.partial(),
+                sense.step,
+            ),
+            Ok(Err(e)) => {
                 let reason = format!("reading the bot's stdout failed: {e}");
-                return self.fault_or_limit(MatchStatus::Crashed, reason, sense.step);
+                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
             }
-            Ok(Some(Ok(line))) => line,
+        }
+    }
+
+    /// Writes the sense line: at once while the pipe has room (it always has, but for a
+    /// bot that does not read its stdin), else the rest through the runtime within the
+    /// step's deadline.
+    async fn send_sense(&mut self, line: &[u8], deadline: Option<Instant>) -> std::io::Result<()> {
+        let written = match nix::unistd::write(self.stdin.as_fd(), line) {
+            Ok(n) => n,
+            Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => 0,
+            Err(e) => return Err(e.into()),
         };
+        if written == line.len() {
+            return Ok(());
+        }
+        let rest = &line[written..];
+        send_bytes(&mut self.stdin, rest, deadline.map(Into::into)).await
+    }
+
+    /// Waits for the answer on the match's own thread for at most [`NEAR_WAIT`] (and
+    /// not past `deadline`): `ppoll` on the bot's stdout and stderr, each ready pipe
+    /// read at once, stderr first, so what the bot wrote there before its answer goes
+    /// with this step (the kernel reports the stderr pipe ready no later than the stdout
+    /// pipe written after it; a bot writing stderr without end has it read 64 times in
+    /// a row at most before its answer is taken, as through the runtime).
+    fn wait_near(&mut self, deadline: Option<Instant>) -> NearWait {
+        use nix::poll::{PollFd, PollFlags, ppoll};
+        let start = Instant::now();
+        let until = deadline.map_or(start + NEAR_WAIT, |d| d.min(start + NEAR_WAIT));
+        let mut stderr_in_a_row = 0;
+        loop {
+            match self.replies.look() {
+                framing::Next::More => {}
+                next => return NearWait::Got(Ok(next)),
+            }
+            let now = Instant::now();
+            if now >= self.watch_at {
+                self.watch_at = now + WATCHDOG_PERIOD;
+                if let Some(kind) = self.process.limit_hit() {
+                    return NearWait::Limit(kind);
+                }
+            }
+            if now >= until {
+                return match deadline {
+                    Some(d) if now >= d => NearWait::TimedOut,
+                    _ => NearWait::Later,
+                };
+            }
+            let wait = nix::sys::time::TimeSpec::from_duration(until - now);
+            let stderr_open = self.stderr.is_open();
+            let (stdout_ready, stderr_ready) = {
+                let mut fds = [
+                    PollFd::new(self.replies.pipe(), PollFlags::POLLIN),
+                    PollFd::new(self.stderr.pipe(), PollFlags::POLLIN),
+                ];
+                let watched = if stderr_open { 2 } else { 1 };
+                match ppoll(&mut fds[..watched], Some(wait), None) {
+                    Ok(_) | Err(nix::errno::Errno::EINTR) => {}
+                    Err(e) => return NearWait::Got(Err(e.into())),
+                }
+                let ready = |fd: &PollFd| fd.any().unwrap_or(false);
+                (ready(&fds[0]), stderr_open && ready(&fds[1]))
+            };
+            if stderr_ready && stderr_in_a_row < framing::STDERR_READS_BEFORE_REPLY {
+                self.stderr.read_now();
+                stderr_in_a_row += 1;
+                continue;
+            }
+            stderr_in_a_row = 0;
+            if stdout_ready && let Err(e) = self.replies.read_now() {
+                return NearWait::Got(Err(e));
+            }
+        }
+    }
+
+    /// The verdict on the line the replies hold, answered `since`.
+    fn answer(&mut self, since: Instant, step: u32) -> Verdict {
         let answer_us = since.elapsed().as_micros() as u64;
         let cpu_now = self.process.cpu_us();
         let cpu_us = match (self.cpu_mark, cpu_now) {
@@ -196,14 +326,15 @@ impl Session {
             _ => None,
         };
         self.cpu_mark = cpu_now;
-        match crate::protocol::decode_answer(&line) {
+        let line = self.replies.line();
+        match crate::protocol::decode_answer(line) {
             Ok(answer) => Verdict::Answer {
                 action: answer.action,
                 answer_us,
                 cpu_us,
                 debug: answer.debug,
             },
-            Err(e) => protocol_fault(e, &line, sense.step),
+            Err(e) => protocol_fault(e, line, step),
         }
     }
 
@@ -318,9 +449,17 @@ async fn send(
     message: &ServerMessage,
     deadline: Option<tokio::time::Instant>,
 ) -> std::io::Result<()> {
-    let line = message.to_line();
+    send_bytes(stdin, message.to_line().as_bytes(), deadline).await
+}
+
+/// Writes `bytes` to the bot, within `deadline` if given.
+async fn send_bytes(
+    stdin: &mut BotStdin,
+    bytes: &[u8],
+    deadline: Option<tokio::time::Instant>,
+) -> std::io::Result<()> {
     let write = async {
-        stdin.write_all(line.as_bytes()).await?;
+        stdin.write_all(bytes).await?;
         stdin.flush().await
     };
     match deadline {

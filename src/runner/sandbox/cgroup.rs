@@ -419,13 +419,13 @@ impl MatchCgroup {
 
     /// CPU time used by every process that ever ran in the cgroup, in µs.
     fn cpu_total_us(&self) -> Option<u64> {
-        let text = match &self.cpu_counter {
-            Some(counter) => counter.read()?,
-            None => std::fs::read_to_string(&self.cpu_usage).ok()?,
-        };
-        match self.version {
+        let parse = |text: &str| match self.version {
             CgroupRoot::V1 { .. } => text.trim().parse::<u64>().ok().map(|ns| ns / 1000),
-            CgroupRoot::V2 { .. } => counter(&text, "usage_usec"),
+            CgroupRoot::V2 { .. } => counter(text, "usage_usec"),
+        };
+        match &self.cpu_counter {
+            Some(counter) => counter.read_with(parse),
+            None => parse(&std::fs::read_to_string(&self.cpu_usage).ok()?),
         }
     }
 

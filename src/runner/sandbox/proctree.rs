@@ -84,11 +84,15 @@ pub fn usage(root: u32) -> TreeUsage {
 
 /// A small kernel file (a counter) read again and again through one open handle: a
 /// read from offset 0 each time, without opening the file per read (which costs more
-/// than the rest of a step).
+/// than the rest of a step), into a buffer on the stack.
 #[derive(Debug)]
 pub struct OpenCounter {
     file: std::fs::File,
 }
+
+/// The most bytes of a counter file [`OpenCounter::read_with`] reads: `cpuacct.usage`
+/// holds one number, a v2 `cpu.stat` six lines (about 150 bytes).
+const COUNTER_BYTES: usize = 512;
 
 impl OpenCounter {
     /// Opens `path`, if it exists and may be read.
@@ -98,12 +102,13 @@ impl OpenCounter {
             .map(|file| OpenCounter { file })
     }
 
-    /// The file's text now (at most 4 KiB).
-    pub fn read(&self) -> Option<String> {
+    /// Reads the file's text now (at most 512 bytes) and hands it to `parse`, without
+    /// allocating: it is read at every step of a match.
+    pub fn read_with<T>(&self, parse: impl FnOnce(&str) -> Option<T>) -> Option<T> {
         use std::os::unix::fs::FileExt;
-        let mut buf = [0u8; 4096];
+        let mut buf = [0u8; COUNTER_BYTES];
         let n = self.file.read_at(&mut buf, 0).ok()?;
-        String::from_utf8(buf[..n].to_vec()).ok()
+        parse(std::str::from_utf8(&buf[..n]).ok()?)
     }
 }
 
