@@ -155,6 +155,23 @@ async fn each_step_records_the_cpu_time_the_bot_spent_on_it_with_and_without_the
 }
 
 #[tokio::test]
+async fn stderr_written_before_each_answer_is_kept_with_its_step() {
+    for sandbox in [Sandbox::None, sandbox()] {
+        let bot = fixture_bot("stderr_each_step", &[]);
+        let r = run_match(&bot, &classic(1), 7, limits(), &sandbox, |_| {}).await;
+        assert_eq!(r.status, MatchStatus::StepLimit, "{:?}", r.error);
+        assert_eq!(r.trace.len(), 1000);
+        for (i, s) in r.trace.iter().enumerate() {
+            let step = i + 1;
+            let want: Vec<String> = (0..step % 4)
+                .map(|l| format!("step {step} line {l}"))
+                .collect();
+            assert_eq!(s.stderr, want, "step {step} ({})", sandbox.level());
+        }
+    }
+}
+
+#[tokio::test]
 async fn a_slow_move_times_out_at_step_2() {
     let limits = Limits {
         move_timeout: Some(Duration::from_millis(300)),
