@@ -10,20 +10,29 @@
 #     the steps (the process's start and exit, the sandbox's set-up and tear-down, the
 #     bot's start) is the same in both, so
 #       per step = (whole run with 900 more steps - whole run) / 900,
-#     each whole run timed from the process's start to its exit;
+#     each whole run timed from the process's start to its exit, played as a user plays
+#     a match (`--json`, no replay file; writing one costs about 0.4 µs a step more);
 #       bot's clock = the mean time from one sense to the next over the idle steps, as the
 #                  bot itself clocks them (benches/trivial_bot.c): a whole step (answer,
 #                  the referee's work, the next sense) with nothing of the start or the
 #                  end in it, so without the run-to-run noise of the sandbox's set-up
 #                  that the difference carries; and
 #       exchange = the mean answer time the referee measures over the idle steps (sense
-#                  written to answer read), the rest of a step being the referee's own
-#                  work.
+#                  written to answer read; from the replay of a third run), the rest of
+#                  a step being the referee's own work.
+#   - the floor of a referee's duties: benches/referee_floor.c around the same bot makes
+#     only the system calls of a step (the sense's write, the wait on stdout and stderr,
+#     the answer's read, the bot's CPU time) and nothing else, measured by the bot's
+#     clock: without the sandbox (the CPU clock of the bot's process), and with the bot
+#     behind the sandbox's walls (bubblewrap's namespaces, the jail `mazearena
+#     sandbox-exec`: uid, limits, Landlock, seccomp) in a cgroup whose CPU counter is
+#     read at every step, as mazearena's sandbox does. What a referee can do per step
+#     is this floor plus its own work (the JSON, the game, the trace).
 #
 # With BASELINE=path/to/an/earlier/mazearena, the same two matches are also played by
 # that binary, in turn with this one, in both kinds of sandbox (rows marked "baseline").
 #
-#   bash benches/step_latency.sh [RUNS]      (default 11; needs gcc and bubblewrap)
+#   bash benches/step_latency.sh [RUNS]      (default 11; needs gcc, bubblewrap, root and cgroup v1)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-11}
@@ -35,6 +44,9 @@ trap 'rm -rf "$tmp"' EXIT
 mkdir "$tmp/bot"
 gcc -O2 -o "$tmp/bot/trivial_bot" benches/trivial_bot.c
 gcc -O2 -o "$tmp/pingpong" benches/pingpong.c
+gcc -O2 -o "$tmp/referee_floor" benches/referee_floor.c
+# The jailed bot runs as another uid: it must reach its folder.
+chmod 755 "$tmp" "$tmp/bot"
 maze=$PWD/mazes/gen-16-s1.txt
 # The optimal path, a reset, the path again: one answer a line.
 ./target/release/mazearena maze solve "$maze" --json | python3 -c '
@@ -42,29 +54,53 @@ import json, sys
 path = [json.dumps(a, separators=(",", ":")) for a in json.load(sys.stdin)["actions"]]
 print("\n".join(path + ["{\"reset\":true}"] + path))' >"$tmp/bot/script.txt"
 
-run_match() { # $1: sandbox, $2: idle steps, $3: binary; prints "whole_us exchange_us steps bot_clock_us"
+run_match() { # $1: sandbox, $2: idle steps, $3: binary; prints "whole_us steps bot_clock_us"
   local a b
   a=$(date +%s%N)
   "$3" run --maze "$maze" --bot "./trivial_bot script.txt $2" \
-    --bot-dir "$tmp/bot" --sandbox "$1" --replay "$tmp/r.json" --json >/dev/null 2>&1
+    --bot-dir "$tmp/bot" --sandbox "$1" --json >"$tmp/r.json" 2>/dev/null
   b=$(date +%s%N)
   python3 - "$tmp/r.json" $(( (b - a) / 1000 )) "$2" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 idle = int(sys.argv[3])
-t = r["trace"]
 assert r["status"] == "finished", r["status"]
-exchange = sum(s["answer_us"] for s in t[1:idle]) / max(idle - 1, 1)
-clock = [l.split()[1] for s in t for l in s.get("stderr", []) if l.startswith("idle_step_ns ")]
+clock = [l.split()[1] for l in r["stderr_tail"].splitlines() if l.startswith("idle_step_ns ")]
 assert clock or idle <= 2, "the bot wrote no idle_step_ns line"
 inside = int(clock[0]) / 1000 if clock else 0.0
-print(f"{sys.argv[2]} {exchange:.1f} {len(t)} {inside:.2f}")
+print(f"{sys.argv[2]} {r['total_steps']} {inside:.2f}")
 PY
+}
+
+exchange() { # $1: sandbox, $2: binary; prints the mean answer time over the idle steps
+  "$2" run --maze "$maze" --bot "./trivial_bot script.txt $IDLE" \
+    --bot-dir "$tmp/bot" --sandbox "$1" --replay "$tmp/r.json" --json >/dev/null 2>&1
+  python3 - "$tmp/r.json" "$IDLE" <<'PY'
+import json, sys
+t = json.load(open(sys.argv[1]))["trace"]
+idle = int(sys.argv[2])
+print(f"{sum(s['answer_us'] for s in t[1:idle]) / (idle - 1):.1f}")
+PY
+}
+
+jail=$PWD/target/release/mazearena
+floor() { # $1: plain|sandbox -> the bot's clock in ns
+  local bot=(./trivial_bot script.txt "$IDLE")
+  if [ "$1" = plain ]; then
+    (cd "$tmp/bot" && "$tmp/referee_floor" -- "${bot[@]}" 2>&1)
+  else
+    (cd "$tmp/bot" && "$tmp/referee_floor" --cgroup -- bwrap --unshare-ipc --unshare-pid \
+      --unshare-net --unshare-uts --unshare-cgroup-try --die-with-parent --new-session \
+      --ro-bind / / --dev /dev --proc /proc --chdir "$tmp/bot" -- \
+      "$jail" sandbox-exec --uid 2000000000 --nproc 68 --fsize 67108864 -- "${bot[@]}" 2>&1)
+  fi | awk '/^idle_step_ns /{print $2}'
 }
 
 for i in $(seq "$RUNS"); do
   echo "same $("$tmp/pingpong" same)"
   echo "split $("$tmp/pingpong" split)"
+  echo "floor-plain $(floor plain)"
+  echo "floor-sandbox $(floor sandbox)"
   for s in none full; do
     for bin in ./target/release/mazearena $BASELINE; do
       key=$s
@@ -72,14 +108,15 @@ for i in $(seq "$RUNS"); do
       # The short and the long run in turn, first one then the other, so that whatever
       # one run leaves the next (the kernel's clean-up of a sandbox) falls on both.
       if [ $((i % 2)) = 1 ]; then
-        read -r short _ n0 _ < <(run_match "$s" 0 "$bin")
-        read -r long exchange n1 inside < <(run_match "$s" "$IDLE" "$bin")
+        read -r short n0 _ < <(run_match "$s" 0 "$bin")
+        read -r long n1 inside < <(run_match "$s" "$IDLE" "$bin")
       else
-        read -r long exchange n1 inside < <(run_match "$s" "$IDLE" "$bin")
-        read -r short _ n0 _ < <(run_match "$s" 0 "$bin")
+        read -r long n1 inside < <(run_match "$s" "$IDLE" "$bin")
+        read -r short n0 _ < <(run_match "$s" 0 "$bin")
       fi
       [ $((n1 - n0)) = "$IDLE" ] || { echo "expected $IDLE more steps: $n0, $n1" >&2; exit 1; }
-      echo "$key $short $long $exchange $inside"
+      answer=$(exchange "$s" "$bin")
+      echo "$key $short $long $answer $inside"
     done
   done
 done >"$tmp/all.txt"
@@ -99,6 +136,10 @@ print("|---|---:|---:|")
 print(f"| pipe round trip, one core (the floor) | {floor:.1f} | 1.00 |")
 split = med("split", lambda r: r[0])
 print(f"| pipe round trip, two cores | {split:.1f} | {split / floor:.2f} |")
+for k, name in [("floor-plain", "a referee of the step's system calls alone (benches/referee_floor.c): the bot's clock"),
+                 ("floor-sandbox", "the same, the bot behind the sandbox's walls and in a cgroup whose CPU counter is read")]:
+    v = med(k, lambda r: r[0]) / 1000
+    print(f"| {name} | {v:.1f} | {v / floor:.2f} |")
 kinds = [("none", "--sandbox none"), ("full", "--sandbox full")]
 if "base-none" in rows:
     kinds += [("base-none", "--sandbox none, the baseline binary"),

@@ -319,9 +319,29 @@ impl MatchRecord {
 
     /// The record without its trace, for summaries.
     pub fn summary(&self) -> MatchRecord {
+        // Field by field: cloning the whole record would copy the trace only to drop it.
         MatchRecord {
+            engine_version: self.engine_version.clone(),
+            protocol: self.protocol,
+            maze_hash: self.maze_hash.clone(),
+            maze_dim: self.maze_dim,
+            seed: self.seed,
+            limits: self.limits.clone(),
+            status: self.status,
+            score: self.score,
+            run0_steps: self.run0_steps,
+            run1_steps: self.run1_steps,
+            total_steps: self.total_steps,
+            warnings: self.warnings.clone(),
+            error: self.error.clone(),
+            stderr_tail: self.stderr_tail.clone(),
+            timings: self.timings.clone(),
+            bot_pid: self.bot_pid,
+            core: self.core,
+            notices: self.notices.clone(),
+            maze_layout: self.maze_layout.clone(),
+            title: self.title.clone(),
             trace: Vec::new(),
-            ..self.clone()
         }
     }
 }
