@@ -335,7 +335,7 @@ impl MatchRecord {
             warnings: self.warnings.clone(),
             error: self.error.clone(),
             stderr_tail: self.stderr_tail.clone(),
-            timings: self.timings.clone(),
+            timings: self.timings,
             bot_pid: self.bot_pid,
             core: self.core,
             notices: self.notices.clone(),
