@@ -203,7 +203,7 @@ pub fn spawn(launch: &Launch<'_>) -> Result<BotProcess, LaunchError> {
             }
             let cgroup = match &full.cgroups {
                 Ok(root) => Some(
-                    root.create(CgroupLimits {
+                    root.kept(CgroupLimits {
                         memory_bytes: launch.memory_limit_bytes,
                         pids: launch.process_limit.map(|n| n + BWRAP_PROCESSES),
                         // Started from the match's thread: its core is the match's.

@@ -155,6 +155,27 @@ async fn each_step_records_the_cpu_time_the_bot_spent_on_it_with_and_without_the
 }
 
 #[tokio::test]
+async fn one_shot_matches_in_a_row_each_count_only_their_own_cpu_time() {
+    // As root with cgroups, one-shot matches take up the cgroups kept on the host
+    // between them (their counters go on from match to match): each match's figures
+    // are its own.
+    let sandbox = sandbox();
+    let bot = fixture_bot("busy_step", &[]);
+    let limits = Limits {
+        max_steps: 8,
+        ..limits()
+    };
+    for round in 0..4 {
+        let r = run_match(&bot, &classic(1), 7, limits, &sandbox, |_| {}).await;
+        assert_eq!(r.status, MatchStatus::StepLimit, "{:?}", r.error);
+        let steps: u64 = r.trace.iter().map(|s| s.cpu_us.unwrap()).sum();
+        assert!((190_000..600_000).contains(&steps), "round {round}: {steps}");
+        let whole = r.timings.bot_cpu_ms.unwrap();
+        assert!((190..900).contains(&whole), "round {round}: {whole} ms");
+    }
+}
+
+#[tokio::test]
 async fn stderr_written_before_each_answer_is_kept_with_its_step() {
     for sandbox in [Sandbox::None, sandbox()] {
         let bot = fixture_bot("stderr_each_step", &[]);

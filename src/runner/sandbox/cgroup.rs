@@ -20,6 +20,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
+use nix::fcntl::{Flock, FlockArg};
+
 /// The CPU quota period, in microseconds; the quota is one period (one core).
 const CPU_PERIOD_US: u64 = 100_000;
 
@@ -95,6 +97,16 @@ impl CgroupRoot {
             .map(drop)
             .map_err(|e| format!("cannot make a match cgroup: {e}"))
         };
+        // A kept cgroup in every folder the probe makes one in was made, limits and all,
+        // by an earlier runner of this host: that proves the hierarchy as the probe would.
+        let proven = root
+            .probed_folders()
+            .iter()
+            .all(|f| f.join(kept_name(0)).is_dir());
+        if proven {
+            root.sweep_stale();
+            return Ok(root);
+        }
         if let Err(e) = probe(&root) {
             // A cpuset that cannot be set up leaves the CPU quota to hold the core.
             match &mut root {
@@ -127,6 +139,34 @@ impl CgroupRoot {
             .flatten()
             .map(PathBuf::as_path)
             .collect(),
+            CgroupRoot::V2 { base } => vec![base.as_path()],
+        }
+    }
+
+    /// The folders a pinned match's cgroup is made in (as the probe's is): with v1, the
+    /// cpu controller's only where there is no cpuset to hold the core.
+    fn probed_folders(&self) -> Vec<&Path> {
+        match self {
+            CgroupRoot::V1 {
+                memory,
+                pids,
+                cpuacct,
+                cpu,
+                cpuset,
+            } => {
+                let quota = cpu.as_ref().filter(|c| cpuset.is_none() && *c != cpuacct);
+                [
+                    Some(memory),
+                    Some(pids),
+                    Some(cpuacct),
+                    cpuset.as_ref(),
+                    quota,
+                ]
+                .into_iter()
+                .flatten()
+                .map(PathBuf::as_path)
+                .collect()
+            }
             CgroupRoot::V2 { base } => vec![base.as_path()],
         }
     }
@@ -188,6 +228,40 @@ impl CgroupRoot {
             std::process::id(),
             NEXT.fetch_add(1, Ordering::Relaxed)
         );
+        self.build(&name, limits, None)
+    }
+
+    /// The cgroup of a one-shot match (`mazearena run`, or a match that cannot be
+    /// played warm): one of the cgroups kept on this host between such matches (`run-K`,
+    /// made by the first runner that needed it) that no other process holds, emptied
+    /// and set for this match; else, when all are held, one of its own as
+    /// [`CgroupRoot::create`] makes. A kept cgroup spares a match the making of its
+    /// cgroups and their removal (some 1.5 ms of a one-shot sandbox's cost,
+    /// docs/PERFORMANCE.md); its counters are read as differences from the match's
+    /// start, as a warm sandbox's are.
+    ///
+    /// # Errors
+    /// The file system errors of making or configuring a cgroup of its own.
+    pub fn kept(&self, limits: CgroupLimits) -> std::io::Result<MatchCgroup> {
+        for slot in 0..KEPT {
+            let Some(lock) = lock_kept(Path::new(KEPT_LOCK_DIR), slot) else {
+                continue;
+            };
+            if let Ok(group) = self.build(&kept_name(slot), limits, Some(lock)) {
+                return Ok(group);
+            }
+        }
+        self.create(limits)
+    }
+
+    /// Makes (or, with the `kept` slot's lock, takes up again) the cgroup `name` with
+    /// `limits`.
+    fn build(
+        &self,
+        name: &str,
+        limits: CgroupLimits,
+        kept: Option<Flock<std::fs::File>>,
+    ) -> std::io::Result<MatchCgroup> {
         let mut group = MatchCgroup {
             dirs: Vec::new(),
             version: self.clone(),
@@ -196,7 +270,9 @@ impl CgroupRoot {
             cpu_usage: PathBuf::new(),
             cpu_counter: None,
             marks: Marks::default(),
+            kept,
         };
+        let name = name.to_string();
         match self {
             CgroupRoot::V1 {
                 memory,
@@ -251,8 +327,46 @@ impl CgroupRoot {
             }
         }
         group.cpu_counter = super::proctree::OpenCounter::open(&group.cpu_usage);
+        if group.kept.is_some() {
+            // Whatever a runner killed before it could empty the cgroup left behind.
+            group.kill_all();
+            group.mark();
+        }
         Ok(group)
     }
+}
+
+/// How many cgroups are kept on a host for one-shot matches.
+const KEPT: usize = 16;
+
+/// Where the locks of the kept cgroups live (root's: cgroups are made as root).
+const KEPT_LOCK_DIR: &str = "/run/mazearena/cgroups";
+
+/// The folder name of kept cgroup `slot`.
+fn kept_name(slot: usize) -> String {
+    format!("run-{slot}")
+}
+
+/// Kept cgroup `slot`'s lock, if no other process holds it (and the lock folder can be
+/// made).
+fn lock_kept(dir: &Path, slot: usize) -> Option<Flock<std::fs::File>> {
+    use std::os::unix::fs::{DirBuilderExt, OpenOptionsExt};
+    if slot == 0 {
+        std::fs::DirBuilder::new()
+            .recursive(true)
+            .mode(0o700)
+            .create(dir)
+            .ok()?;
+    }
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .mode(0o600)
+        .custom_flags(libc::O_CLOEXEC | libc::O_NOFOLLOW)
+        .open(dir.join(format!("{}.lock", kept_name(slot))))
+        .ok()?;
+    Flock::lock(file, FlockArg::LockExclusiveNonblock).ok()
 }
 
 /// Kills whatever is left in a match cgroup of a process that is gone, and removes it.
@@ -302,6 +416,9 @@ pub struct MatchCgroup {
     cpu_counter: Option<super::proctree::OpenCounter>,
     /// The counters when the current match began (all zero for a cgroup of one match).
     marks: Marks,
+    /// For a kept cgroup ([`CgroupRoot::kept`]), the lock that makes it this match's:
+    /// it is emptied, not removed, when dropped.
+    kept: Option<Flock<std::fs::File>>,
 }
 
 /// A reused cgroup's counters at the start of a match: the match's own are the
@@ -316,10 +433,13 @@ struct Marks {
 impl MatchCgroup {
     fn make(&mut self, dir: &Path) -> std::io::Result<PathBuf> {
         let mut made = std::fs::create_dir(dir);
-        if made
+        let exists = made
             .as_ref()
-            .is_err_and(|e| e.kind() == std::io::ErrorKind::AlreadyExists)
-        {
+            .is_err_and(|e| e.kind() == std::io::ErrorKind::AlreadyExists);
+        if exists && self.kept.is_some() {
+            // A kept cgroup, taken up again.
+            made = Ok(());
+        } else if exists {
             // Our names never repeat within a process: this one was left by a process
             // that had our pid before us and was killed.
             remove_stale(dir);
@@ -474,6 +594,9 @@ impl MatchCgroup {
 impl Drop for MatchCgroup {
     fn drop(&mut self) {
         self.kill_all();
+        if self.kept.is_some() {
+            return;
+        }
         for dir in self.dirs.iter().rev() {
             // A dying process may hold the cgroup for a moment.
             for _ in 0..200 {
