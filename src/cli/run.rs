@@ -116,6 +116,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     };
     // One core for the referee and the bot (runner::affinity): the one we are on.
     crate::runner::affinity::pin_to_this_core();
+    // The sandbox's orphans are ours to reap (see below), not the host's init's.
+    let reaps = runner::process::adopt_orphans().is_ok();
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -147,13 +149,23 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             }
         },
     ));
-    if !matches!(
+    // A bot that failed in a sandbox that does not work here is not the bot's fault.
+    let verified = if matches!(
         record.status,
         MatchStatus::Finished | MatchStatus::StepLimit
     ) {
-        // A bot that failed in a sandbox that does not work here is not the bot's fault.
-        super::sandbox::verify(&sandbox)?;
+        Ok(())
+    } else {
+        super::sandbox::verify(&sandbox)
+    };
+    if reaps {
+        // Every process of the match (and of the test) was killed and its outer process
+        // waited for; what is left are ended orphans (bubblewrap's init), which would
+        // hold the match's kept cgroup for the next run until the host's init reaped
+        // them.
+        runner::process::reap_orphans();
     }
+    verified?;
     let mut record = record;
     record.maze_layout = Some(crate::engine::mazefile::numeric::write(&maze));
     let title = format!(

@@ -169,10 +169,85 @@ async fn one_shot_matches_in_a_row_each_count_only_their_own_cpu_time() {
         let r = run_match(&bot, &classic(1), 7, limits, &sandbox, |_| {}).await;
         assert_eq!(r.status, MatchStatus::StepLimit, "{:?}", r.error);
         let steps: u64 = r.trace.iter().map(|s| s.cpu_us.unwrap()).sum();
-        assert!((190_000..600_000).contains(&steps), "round {round}: {steps}");
+        assert!(
+            (190_000..600_000).contains(&steps),
+            "round {round}: {steps}"
+        );
         let whole = r.timings.bot_cpu_ms.unwrap();
         assert!((190..900).contains(&whole), "round {round}: {whole} ms");
     }
+}
+
+#[test]
+fn a_kept_cgroup_that_still_counts_an_ended_process_is_not_taken_up() {
+    use mazearena::runner::sandbox::cgroup::CgroupLimits;
+    let Sandbox::Full(full) = sandbox() else {
+        println!("SKIP: no sandbox here");
+        return;
+    };
+    let root = match (&full.cgroups, nix::unistd::geteuid().is_root()) {
+        (Ok(root), true) => root.clone(),
+        (e, _) => {
+            assert!(
+                std::env::var("CI").as_deref() != Ok("true"),
+                "CI=true runs as root with cgroups: {e:?}"
+            );
+            println!("SKIP: kept cgroups are made as root with cgroups");
+            return;
+        }
+    };
+    let limits = CgroupLimits {
+        memory_bytes: Some(64 << 20),
+        pids: Some(8),
+        core: None,
+    };
+    let first = root.kept(limits).unwrap();
+    let files = first.join_files();
+    // A process that joins it and ends, not yet reaped (its parent, this test, has not
+    // waited for it): the cgroup still counts it.
+    let script = files
+        .iter()
+        .map(|f| format!("echo $$ > {}", f.display()))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let mut child = std::process::Command::new("sh")
+        .args(["-c", &script])
+        .spawn()
+        .unwrap();
+    let pids_dir = files
+        .iter()
+        .find(|f| f.parent().unwrap().join("pids.current").exists())
+        .map(|f| f.parent().unwrap().to_path_buf())
+        .unwrap();
+    let counted = || {
+        std::fs::read_to_string(pids_dir.join("pids.current"))
+            .unwrap()
+            .trim()
+            .parse::<u64>()
+            .unwrap()
+    };
+    let member = || {
+        !std::fs::read_to_string(pids_dir.join("cgroup.procs"))
+            .unwrap()
+            .trim()
+            .is_empty()
+    };
+    // Until it has joined (counted) and ended (no longer a member).
+    let until = std::time::Instant::now() + Duration::from_secs(10);
+    while (counted() == 0 || member()) && std::time::Instant::now() < until {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(counted(), 1, "the ended process is still counted");
+    drop(first);
+    let second = root.kept(limits).unwrap();
+    assert!(
+        second.join_files().iter().all(|f| !files.contains(f)),
+        "a cgroup that still counts an ended process was taken up: {:?}",
+        second.join_files()
+    );
+    drop(second);
+    child.wait().unwrap();
+    assert_eq!(counted(), 0, "reaped, it is no longer counted");
 }
 
 #[tokio::test]

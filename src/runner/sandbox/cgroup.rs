@@ -330,6 +330,14 @@ impl CgroupRoot {
         if group.kept.is_some() {
             // Whatever a runner killed before it could empty the cgroup left behind.
             group.kill_all();
+            // A process that ended but was not yet reaped (bubblewrap's init, orphaned
+            // when bubblewrap exits first, waits for the host's init) still counts
+            // against the process limit: such a cgroup waits for a later match.
+            if read_counter_file(&group.pids.join("pids.current")).unwrap_or(0) > 0 {
+                return Err(std::io::Error::other(
+                    "a kept cgroup still counts processes that ended",
+                ));
+            }
             group.mark();
         }
         Ok(group)
@@ -607,6 +615,11 @@ impl Drop for MatchCgroup {
             }
         }
     }
+}
+
+/// The number a one-number file such as `pids.current` holds.
+fn read_counter_file(path: &Path) -> Option<u64> {
+    std::fs::read_to_string(path).ok()?.trim().parse().ok()
 }
 
 fn read_counter(path: &Path, key: &str) -> Option<u64> {
