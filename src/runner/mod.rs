@@ -4,8 +4,10 @@
 //! otherwise), speaks protocol v1 with it one step at a time ([`session`]), drives the
 //! pure [`Game`], and always returns a [`MatchRecord`]: a misbehaving bot is an outcome
 //! recorded with its reason, never an error or a panic. Matches are plain futures, so
-//! many can run at once in one process. This module is the only code that starts
-//! processes.
+//! many can run at once in one process, each best on a thread of its own (as a worker's
+//! and `mazearena run`'s are): a match waits for each answer on its thread for up to
+//! 2 ms before it lets the runtime wait ([`session`]), so matches that share a thread
+//! take turns. This module is the only code that starts processes.
 
 pub mod affinity;
 pub mod botenv;
