@@ -99,8 +99,10 @@ floor() { # $1: plain|sandbox -> the bot's clock in ns
 for i in $(seq "$RUNS"); do
   echo "same $("$tmp/pingpong" same)"
   echo "split $("$tmp/pingpong" split)"
-  echo "floor-plain $(floor plain)"
-  echo "floor-sandbox $(floor sandbox)"
+  for f in plain sandbox; do
+    ns=$(floor "$f" || true)
+    [ -z "$ns" ] || echo "floor-$f $ns"
+  done
   for s in none full; do
     for bin in ./target/release/mazearena $BASELINE; do
       key=$s
@@ -138,6 +140,10 @@ split = med("split", lambda r: r[0])
 print(f"| pipe round trip, two cores | {split:.1f} | {split / floor:.2f} |")
 for k, name in [("floor-plain", "a referee of the step's system calls alone (benches/referee_floor.c): the bot's clock"),
                  ("floor-sandbox", "the same, the bot behind the sandbox's walls and in a cgroup whose CPU counter is read")]:
+    if k not in rows:
+        # referee_floor.c makes its cgroup as root, with cgroup v1.
+        print(f"| {name} | not measured here (needs root and cgroup v1) | |")
+        continue
     v = med(k, lambda r: r[0]) / 1000
     print(f"| {name} | {v:.1f} | {v / floor:.2f} |")
 kinds = [("none", "--sandbox none"), ("full", "--sandbox full")]
