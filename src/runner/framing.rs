@@ -141,12 +141,28 @@ impl<R: AsFd> StderrReader<R> {
         self.stream.as_fd()
     }
 
-    /// Takes in one read of the pipe made now, past the runtime: for a pipe just found
-    /// ready (a read that would block reads nothing).
-    pub fn read_now(&mut self) {
+    /// Takes in one read of the pipe made now, past the runtime (a read that would
+    /// block reads nothing); whether it took in bytes.
+    pub fn read_now(&mut self) -> bool {
         match nix::unistd::read(self.stream.as_fd(), &mut self.buf) {
-            Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => {}
-            read => self.take_in(read.map_err(std::io::Error::from)),
+            Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => false,
+            read => {
+                let took = matches!(read, Ok(n) if n > 0);
+                self.take_in(read.map_err(std::io::Error::from));
+                took
+            }
+        }
+    }
+
+    /// Reads now, past the runtime, what the pipe holds (at most
+    /// [`STDERR_READS_BEFORE_REPLY`] reads): after an answer the runtime found, whose
+    /// readiness reports may lag the pipes' (a read made past the runtime leaves them
+    /// behind), so that stderr written before the answer still goes with it.
+    pub fn drain_now(&mut self) {
+        for _ in 0..STDERR_READS_BEFORE_REPLY {
+            if !self.open || !self.read_now() {
+                break;
+            }
         }
     }
 }
@@ -215,16 +231,22 @@ pub const STDERR_READS_BEFORE_REPLY: u32 = 64;
 
 /// Waits until the bot's stdout holds a reply line (or ends, or holds too long a line),
 /// reading every stderr byte the bot wrote before it into `stderr` meanwhile (see
-/// [`StderrReader::drain_while`]); then [`ReplyReader::line`] has the line. Cancel safe.
+/// [`StderrReader::drain_while`], then [`StderrReader::drain_now`]); then
+/// [`ReplyReader::line`] has the line. Cancel safe.
 pub async fn next_reply<O, E>(
     replies: &mut ReplyReader<O>,
     stderr: &mut StderrReader<E>,
 ) -> std::io::Result<Next>
 where
     O: AsyncRead + Unpin,
-    E: AsyncRead + Unpin,
+    E: AsyncRead + AsFd + Unpin,
 {
-    stderr.drain_while(replies.next()).await
+    let next = stderr.drain_while(replies.next()).await;
+    // The runtime's readiness of stdout may be older than its stderr's (a read made past
+    // the runtime, [`ReplyReader::read_now`], leaves it behind): what stderr holds now
+    // was written before this answer was read.
+    stderr.drain_now();
+    next
 }
 
 /// What a bot's stdout holds next.
@@ -236,8 +258,6 @@ pub enum Next {
     TooLong,
     /// The end of the stream, every line handed on.
     End,
-    /// Nothing whole yet: more must be read.
-    More,
 }
 
 /// The bot's reply lines: "\n"-ended lines of at most [`MAX_LINE_BYTES`] bytes (at the
@@ -265,8 +285,9 @@ impl<R> ReplyReader<R> {
         }
     }
 
-    /// What the bytes read so far hold next (a line handed on before is dropped first).
-    pub fn look(&mut self) -> Next {
+    /// What the bytes read so far hold next (a line handed on before is dropped first);
+    /// `None` while nothing whole is there and more must be read.
+    pub fn look(&mut self) -> Option<Next> {
         self.lines.look()
     }
 
@@ -283,12 +304,11 @@ impl<R> ReplyReader<R> {
 }
 
 impl<R: AsyncRead + Unpin> ReplyReader<R> {
-    /// Waits for what the stream holds next (never [`Next::More`]). Cancel safe.
+    /// Waits for what the stream holds next. Cancel safe.
     pub async fn next(&mut self) -> std::io::Result<Next> {
         loop {
-            match self.lines.look() {
-                Next::More => {}
-                next => return Ok(next),
+            if let Some(next) = self.lines.look() {
+                return Ok(next);
             }
             let n = self.stream.read(self.lines.room()).await?;
             self.lines.took(n);
@@ -303,12 +323,15 @@ impl<R: AsFd> ReplyReader<R> {
     }
 
     /// Takes in one read of the pipe made now, past the runtime: for a pipe just found
-    /// ready (a read that would block reads nothing). Call it only after
-    /// [`ReplyReader::look`] said [`Next::More`].
+    /// ready (a read that would block reads nothing), when [`ReplyReader::look`] found
+    /// nothing whole (with a line still handed on, it reads nothing).
     ///
     /// # Errors
     /// The read failed.
     pub fn read_now(&mut self) -> std::io::Result<()> {
+        if self.lines.line_end.is_some() {
+            return Ok(());
+        }
         match nix::unistd::read(self.stream.as_fd(), self.lines.room()) {
             Ok(n) => self.lines.took(n),
             Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => {}
@@ -341,27 +364,27 @@ struct Lines {
 }
 
 impl Lines {
-    fn look(&mut self) -> Next {
+    fn look(&mut self) -> Option<Next> {
         self.drop_line();
         let read_to = self.end.min(self.start + MAX_LINE_BYTES + 1);
         let from = self.start + self.scanned;
         if let Some(i) = self.buf[from..read_to].iter().position(|&b| b == b'\n') {
             self.line_end = Some(from + i);
-            return Next::Line;
+            return Some(Next::Line);
         }
         if self.end - self.start > MAX_LINE_BYTES {
-            return Next::TooLong;
+            return Some(Next::TooLong);
         }
         self.scanned = read_to - self.start;
         if !self.eof {
-            return Next::More;
+            return None;
         }
         if self.end > self.start {
             // The last bytes, without a newline.
             self.line_end = Some(self.end);
-            return Next::Line;
+            return Some(Next::Line);
         }
-        Next::End
+        Some(Next::End)
     }
 
     fn drop_line(&mut self) {
@@ -372,7 +395,7 @@ impl Lines {
     }
 
     /// Room for the next read, after moving what is kept to the front when it is
-    /// needed. Never empty after `look` said [`Next::More`]: the buffer holds a line
+    /// needed. Never empty after `look` found nothing whole: the buffer holds a line
     /// over the cap and a read more.
     fn room(&mut self) -> &mut [u8] {
         self.drop_line();
@@ -438,6 +461,7 @@ impl Tail {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
 
     #[test]
     fn a_matchs_stderr_lines_stop_at_their_budget_with_one_line_saying_so() {
@@ -469,7 +493,6 @@ mod tests {
             Next::Line => Some(Ok(r.line().to_vec())),
             Next::TooLong => Some(Err(())),
             Next::End => None,
-            Next::More => unreachable!("next waits for more"),
         }
     }
 
@@ -607,26 +630,65 @@ mod tests {
     }
 
     #[tokio::test]
-    async fn a_bot_that_writes_stderr_without_end_still_has_its_answer_read() {
-        // 1 MiB of stderr waits before the answer, more than the reads allowed in a row
-        // take in: the answer is read after those reads, the rest of the stderr later.
+    async fn stderr_before_an_answer_is_read_before_it_after_reads_past_the_runtime() {
         let (out, mut replies, err, mut stderr) = bot_pipes();
-        let mib: usize = 1 << 20;
-        nix::fcntl::fcntl(&err, nix::fcntl::FcntlArg::F_SETPIPE_SZ(mib as i32)).unwrap();
-        let chunk = vec![b'x'; 4096];
-        for _ in 0..mib / chunk.len() {
-            assert_eq!(nix::unistd::write(&err, &chunk).unwrap(), chunk.len());
-        }
-        nix::unistd::write(&out, b"answer\n").unwrap();
+        // The runtime has found stderr empty (its readiness cleared)...
+        let _ = tokio::time::timeout(Duration::from_millis(5), stderr.read_some()).await;
+        // ...and stdout ready, but the answer was read past it (its readiness left set
+        // on an empty pipe), as the near wait does.
+        nix::unistd::write(&out, b"first\n").unwrap();
+        tokio::time::sleep(Duration::from_millis(5)).await;
+        assert_eq!(replies.look(), None);
+        replies.read_now().unwrap();
+        assert_eq!(replies.look(), Some(Next::Line));
+        // A line on stderr, then the answer, with no turn of the runtime between them
+        // and the wait: the stale readiness of stdout could take the answer first.
+        nix::unistd::write(&err, b"thinking\n").unwrap();
+        nix::unistd::write(&out, b"second\n").unwrap();
         assert_eq!(
             next_reply(&mut replies, &mut stderr).await.unwrap(),
             Next::Line
         );
-        assert_eq!(replies.line(), b"answer");
-        let read = STDERR_READS_BEFORE_REPLY as u64 * stderr.buf.len() as u64;
-        assert!(read < mib as u64);
-        assert_eq!(stderr.tail.total, read);
+        assert_eq!(replies.line(), b"second");
+        assert_eq!(stderr.take_lines(), ["thinking"]);
         drop((out, err));
+    }
+
+    #[tokio::test]
+    async fn a_bot_that_writes_stderr_without_end_still_has_its_answer_read() {
+        // stderr keeps coming, from before the answer to after it (8 MiB through a full
+        // pipe): the answer is taken after a bounded number of stderr reads (in a row
+        // before it, and at once after it), the rest of the stderr later.
+        let (out, mut replies, err, mut stderr) = bot_pipes();
+        nix::unistd::write(&out, b"answer\n").unwrap();
+        let writer = std::thread::spawn(move || {
+            let chunk = vec![b'x'; 4096];
+            let mut sent = 0;
+            while sent < 8 << 20 {
+                match nix::unistd::write(&err, &chunk) {
+                    Ok(n) => sent += n,
+                    Err(nix::errno::Errno::EAGAIN) => std::thread::yield_now(),
+                    Err(_) => break,
+                }
+            }
+        });
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        let next = tokio::time::timeout(
+            Duration::from_secs(10),
+            next_reply(&mut replies, &mut stderr),
+        )
+        .await
+        .expect("the answer is taken despite the flood");
+        assert_eq!(next.unwrap(), Next::Line);
+        assert_eq!(replies.line(), b"answer");
+        let bound = 2 * STDERR_READS_BEFORE_REPLY as u64 * stderr.buf.len() as u64;
+        assert!(
+            stderr.tail.total <= bound,
+            "{} > {bound}",
+            stderr.tail.total
+        );
+        drop((out, stderr));
+        writer.join().unwrap();
     }
 
     #[test]

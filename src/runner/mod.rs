@@ -7,7 +7,8 @@
 //! many can run at once in one process, each best on a thread of its own (as a worker's
 //! and `mazearena run`'s are): a match waits for each answer on its thread for up to
 //! 2 ms before it lets the runtime wait ([`session`]), so matches that share a thread
-//! take turns. This module is the only code that starts processes.
+//! hold each other up by as much a step (their answer times count it). This module is
+//! the only code that starts processes.
 
 pub mod affinity;
 pub mod botenv;

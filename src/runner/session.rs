@@ -90,15 +90,15 @@ pub struct Session {
     turned_at: Instant,
 }
 
-/// How a wait on the match's own thread ended.
-enum NearWait {
+/// How a wait for an answer ended.
+enum Waited {
     /// The reply pipe holds what is next (or could not be read).
     Got(std::io::Result<framing::Next>),
     /// The step's deadline passed.
     TimedOut,
     /// A whole-match limit was hit.
     Limit(LimitKind),
-    /// Nothing yet: wait through the runtime.
+    /// Nothing yet on the match's thread: wait through the runtime.
     Later,
 }
 
@@ -189,31 +189,29 @@ impl Session {
             let (status, failure) = write_failure(e, sense.step);
             return self.limit_or(Verdict::Fault(status, failure), sense.step);
         }
-        let next = match self.wait_near(deadline) {
-            NearWait::Got(next) => Ok(next),
-            NearWait::TimedOut => Err(()),
-            NearWait::Limit(kind) => return self.limit_fault(kind, sense.step),
-            NearWait::Later => {
-                if let Some(d) = deadline {
-                    self.step_limit.as_mut().reset(d.into());
-                }
-                self.turned_at = Instant::now();
-                loop {
-                    tokio::select! {
-                        biased;
-                        r = framing::next_reply(&mut self.replies, &mut self.stderr) => break Ok(r),
-                        () = self.step_limit.as_mut(), if deadline.is_some() => break Err(()),
-                        _ = self.watchdog.tick() => {
-                            if let Some(kind) = self.process.limit_hit() {
-                                return self.limit_fault(kind, sense.step);
-                            }
-                        }
-                    }
-                }
-            }
+        let waited = match self.wait_near(deadline) {
+            Waited::Later => self.wait_through_runtime(deadline).await,
+            waited => waited,
         };
-        match next {
-            Err(()) => {
+        match waited {
+            Waited::Got(Ok(framing::Next::Line)) => self.answer(since, sense.step),
+            Waited::Got(Ok(framing::Next::End)) => {
+                let reason = format!(
+                    "the bot closed its stdout (or exited) before answering step {}",
+                    sense.step
+                );
+                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
+            }
+            Waited::Got(Ok(framing::Next::TooLong)) => protocol_fault(
+                ProtocolError::LineTooLong,
+                self.replies.partial(),
+                sense.step,
+            ),
+            Waited::Got(Err(e)) => {
+                let reason = format!("reading the bot's stdout failed: {e}");
+                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
+            }
+            Waited::TimedOut | Waited::Later => {
                 let what = if sense.step == 1 { "startup" } else { "move" };
                 let ms = limit.map_or(0, |l| l.as_millis());
                 let mut reason = format!(
@@ -225,22 +223,27 @@ impl Session {
                 }
                 self.fault_or_limit(MatchStatus::Timeout, reason, sense.step)
             }
-            Ok(Ok(framing::Next::Line)) => self.answer(since, sense.step),
-            Ok(Ok(framing::Next::End | framing::Next::More)) => {
-                let reason = format!(
-                    "the bot closed its stdout (or exited) before answering step {}",
-                    sense.step
-                );
-                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
-            }
-            Ok(Ok(framing::Next::TooLong)) => protocol_fault(
-                ProtocolError::LineTooLong,
-                self.replies.partial(),
-                sense.step,
-            ),
-            Ok(Err(e)) => {
-                let reason = format!("reading the bot's stdout failed: {e}");
-                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
+            Waited::Limit(kind) => self.limit_fault(kind, sense.step),
+        }
+    }
+
+    /// Waits for the answer through the runtime (a bot that thinks), under `deadline`,
+    /// looking at the whole-match limits meanwhile. Never [`Waited::Later`].
+    async fn wait_through_runtime(&mut self, deadline: Option<Instant>) -> Waited {
+        if let Some(d) = deadline {
+            self.step_limit.as_mut().reset(d.into());
+        }
+        self.turned_at = Instant::now();
+        loop {
+            tokio::select! {
+                biased;
+                r = framing::next_reply(&mut self.replies, &mut self.stderr) => return Waited::Got(r),
+                () = self.step_limit.as_mut(), if deadline.is_some() => return Waited::TimedOut,
+                _ = self.watchdog.tick() => {
+                    if let Some(kind) = self.process.limit_hit() {
+                        return Waited::Limit(kind);
+                    }
+                }
             }
         }
     }
@@ -267,27 +270,26 @@ impl Session {
     /// with this step (the kernel reports the stderr pipe ready no later than the stdout
     /// pipe written after it; a bot writing stderr without end has it read 64 times in
     /// a row at most before its answer is taken, as through the runtime).
-    fn wait_near(&mut self, deadline: Option<Instant>) -> NearWait {
+    fn wait_near(&mut self, deadline: Option<Instant>) -> Waited {
         use nix::poll::{PollFd, PollFlags, ppoll};
         let start = Instant::now();
         let until = deadline.map_or(start + NEAR_WAIT, |d| d.min(start + NEAR_WAIT));
         let mut stderr_in_a_row = 0;
         loop {
-            match self.replies.look() {
-                framing::Next::More => {}
-                next => return NearWait::Got(Ok(next)),
+            if let Some(next) = self.replies.look() {
+                return Waited::Got(Ok(next));
             }
             let now = Instant::now();
             if now >= self.watch_at {
                 self.watch_at = now + WATCHDOG_PERIOD;
                 if let Some(kind) = self.process.limit_hit() {
-                    return NearWait::Limit(kind);
+                    return Waited::Limit(kind);
                 }
             }
             if now >= until {
                 return match deadline {
-                    Some(d) if now >= d => NearWait::TimedOut,
-                    _ => NearWait::Later,
+                    Some(d) if now >= d => Waited::TimedOut,
+                    _ => Waited::Later,
                 };
             }
             let wait = nix::sys::time::TimeSpec::from_duration(until - now);
@@ -300,7 +302,7 @@ impl Session {
                 let watched = if stderr_open { 2 } else { 1 };
                 match ppoll(&mut fds[..watched], Some(wait), None) {
                     Ok(_) | Err(nix::errno::Errno::EINTR) => {}
-                    Err(e) => return NearWait::Got(Err(e.into())),
+                    Err(e) => return Waited::Got(Err(e.into())),
                 }
                 let ready = |fd: &PollFd| fd.any().unwrap_or(false);
                 (ready(&fds[0]), stderr_open && ready(&fds[1]))
@@ -312,7 +314,7 @@ impl Session {
             }
             stderr_in_a_row = 0;
             if stdout_ready && let Err(e) = self.replies.read_now() {
-                return NearWait::Got(Err(e));
+                return Waited::Got(Err(e));
             }
         }
     }

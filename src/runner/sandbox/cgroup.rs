@@ -97,16 +97,6 @@ impl CgroupRoot {
             .map(drop)
             .map_err(|e| format!("cannot make a match cgroup: {e}"))
         };
-        // A kept cgroup in every folder the probe makes one in was made, limits and all,
-        // by an earlier runner of this host: that proves the hierarchy as the probe would.
-        let proven = root
-            .probed_folders()
-            .iter()
-            .all(|f| f.join(kept_name(0)).is_dir());
-        if proven {
-            root.sweep_stale();
-            return Ok(root);
-        }
         if let Err(e) = probe(&root) {
             // A cpuset that cannot be set up leaves the CPU quota to hold the core.
             match &mut root {
@@ -139,34 +129,6 @@ impl CgroupRoot {
             .flatten()
             .map(PathBuf::as_path)
             .collect(),
-            CgroupRoot::V2 { base } => vec![base.as_path()],
-        }
-    }
-
-    /// The folders a pinned match's cgroup is made in (as the probe's is): with v1, the
-    /// cpu controller's only where there is no cpuset to hold the core.
-    fn probed_folders(&self) -> Vec<&Path> {
-        match self {
-            CgroupRoot::V1 {
-                memory,
-                pids,
-                cpuacct,
-                cpu,
-                cpuset,
-            } => {
-                let quota = cpu.as_ref().filter(|c| cpuset.is_none() && *c != cpuacct);
-                [
-                    Some(memory),
-                    Some(pids),
-                    Some(cpuacct),
-                    cpuset.as_ref(),
-                    quota,
-                ]
-                .into_iter()
-                .flatten()
-                .map(PathBuf::as_path)
-                .collect()
-            }
             CgroupRoot::V2 { base } => vec![base.as_path()],
         }
     }
@@ -218,7 +180,7 @@ impl CgroupRoot {
         }
     }
 
-    /// Makes the cgroup of one match with `limits`.
+    /// Makes the cgroup of one match with `limits` (removed when the match is over).
     ///
     /// # Errors
     /// The file system errors of making or configuring it.
@@ -228,40 +190,63 @@ impl CgroupRoot {
             std::process::id(),
             NEXT.fetch_add(1, Ordering::Relaxed)
         );
-        self.build(&name, limits, None)
+        self.build(&name, limits, false)
     }
 
     /// The cgroup of a one-shot match (`mazearena run`, or a match that cannot be
-    /// played warm): one of the cgroups kept on this host between such matches (`run-K`,
-    /// made by the first runner that needed it) that no other process holds, emptied
-    /// and set for this match; else, when all are held, one of its own as
+    /// played warm): one of the cgroups kept between such matches (`run-K`, made by the
+    /// first runner that needed it) that no other process holds, emptied and set for
+    /// this match; else, when none can be taken up, one of its own as
     /// [`CgroupRoot::create`] makes. A kept cgroup spares a match the making of its
-    /// cgroups and their removal (some 1.5 ms of a one-shot sandbox's cost,
-    /// docs/PERFORMANCE.md); its counters are read as differences from the match's
-    /// start, as a warm sandbox's are.
+    /// cgroups and their removal (docs/PERFORMANCE.md); its counters are read as
+    /// differences from the match's start, as a warm sandbox's are.
+    ///
+    /// A kept cgroup is held by an exclusive `flock` on its own folder in the pids
+    /// hierarchy for as long as its match lasts: every runner that shares the hierarchy
+    /// sees the same lock, whatever its `/run`.
     ///
     /// # Errors
     /// The file system errors of making or configuring a cgroup of its own.
     pub fn kept(&self, limits: CgroupLimits) -> std::io::Result<MatchCgroup> {
         for slot in 0..KEPT {
-            let Some(lock) = lock_kept(Path::new(KEPT_LOCK_DIR), slot) else {
+            let name = format!("run-{slot}");
+            let Some(lock) = self.lock_kept(&name) else {
                 continue;
             };
-            if let Ok(group) = self.build(&kept_name(slot), limits, Some(lock)) {
+            if let Ok(mut group) = self.build(&name, limits, true) {
+                group.kept = Some(lock);
                 return Ok(group);
             }
+            // A cgroup that could not be taken up was removed (as ours, under the lock).
         }
         self.create(limits)
     }
 
-    /// Makes (or, with the `kept` slot's lock, takes up again) the cgroup `name` with
-    /// `limits`.
-    fn build(
-        &self,
-        name: &str,
-        limits: CgroupLimits,
-        kept: Option<Flock<std::fs::File>>,
-    ) -> std::io::Result<MatchCgroup> {
+    /// The lock of kept cgroup `name` (its folder in the pids hierarchy, made if
+    /// needed), if no other process holds it.
+    fn lock_kept(&self, name: &str) -> Option<Flock<std::fs::File>> {
+        use std::os::unix::fs::OpenOptionsExt;
+        let dir = match self {
+            CgroupRoot::V1 { pids, .. } => pids.join(name),
+            CgroupRoot::V2 { base } => base.join(name),
+        };
+        match std::fs::create_dir(&dir) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+            Err(_) => return None,
+        }
+        let folder = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_DIRECTORY | libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&dir)
+            .ok()?;
+        Flock::lock(folder, FlockArg::LockExclusiveNonblock).ok()
+    }
+
+    /// Makes the cgroup `name` with `limits`; with `reuse`, takes up the folders of a
+    /// kept cgroup that stand (emptied first, and refused while it still counts a
+    /// process), else replaces a stale one. On an error, what was made is removed.
+    fn build(&self, name: &str, limits: CgroupLimits, reuse: bool) -> std::io::Result<MatchCgroup> {
         let mut group = MatchCgroup {
             dirs: Vec::new(),
             version: self.clone(),
@@ -270,10 +255,12 @@ impl CgroupRoot {
             cpu_usage: PathBuf::new(),
             cpu_counter: None,
             marks: Marks::default(),
-            kept,
+            reuse,
+            kept: None,
         };
-        let name = name.to_string();
-        match self {
+        // The folders first, every limit after: a kept cgroup is emptied in between, so
+        // that no process left in it meets this match's limits.
+        let pin = match self {
             CgroupRoot::V1 {
                 memory,
                 pids,
@@ -281,101 +268,57 @@ impl CgroupRoot {
                 cpu,
                 cpuset,
             } => {
-                group.memory = group.make(&memory.join(&name))?;
-                group.pids = group.make(&pids.join(&name))?;
-                let acct = group.make(&cpuacct.join(&name))?;
+                // The pids folder first, so that it is removed last: a kept cgroup's
+                // lock is on it ([`CgroupRoot::kept`]).
+                group.pids = group.make(&pids.join(name))?;
+                group.memory = group.make(&memory.join(name))?;
+                let acct = group.make(&cpuacct.join(name))?;
                 group.cpu_usage = acct.join("cpuacct.usage");
-                group.limit(limits.memory_bytes, limits.pids)?;
-                let pinned = match (limits.core, cpuset) {
-                    (Some(core), Some(cpuset)) => {
-                        let dir = group.make(&cpuset.join(&name))?;
-                        // A v1 cpuset takes no process before it has memory nodes.
-                        copy_file(cpuset, &dir, "cpuset.mems")?;
-                        write(&dir, "cpuset.cpus", core as u64)?;
-                        true
-                    }
-                    _ => false,
+                let pin = match (limits.core, cpuset) {
+                    (Some(core), Some(cpuset)) => Some((group.make(&cpuset.join(name))?, core)),
+                    _ => None,
                 };
-                if let Some(cpu) = cpu.as_ref().filter(|_| !pinned) {
-                    if cpu != cpuacct {
-                        let dir = group.make(&cpu.join(&name))?;
-                        write(&dir, "cpu.cfs_period_us", CPU_PERIOD_US)?;
-                        write(&dir, "cpu.cfs_quota_us", CPU_PERIOD_US)?;
-                    } else {
-                        write(&acct, "cpu.cfs_period_us", CPU_PERIOD_US)?;
-                        write(&acct, "cpu.cfs_quota_us", CPU_PERIOD_US)?;
-                    }
+                if pin.is_none()
+                    && let Some(cpu) = cpu.as_ref().filter(|c| *c != cpuacct)
+                {
+                    group.make(&cpu.join(name))?;
                 }
+                pin
             }
             CgroupRoot::V2 { base } => {
-                let dir = group.make(&base.join(&name))?;
-                let _ = std::fs::write(dir.join("memory.swap.max"), "0");
+                let dir = group.make(&base.join(name))?;
                 group.memory = dir.clone();
                 group.pids = dir.clone();
-                group.limit(limits.memory_bytes, limits.pids)?;
-                // Without the cpuset controller the file is missing and the write fails.
-                let pinned = limits
-                    .core
-                    .is_some_and(|core| write(&dir, "cpuset.cpus", core as u64).is_ok());
-                if !pinned {
-                    let _ = std::fs::write(
-                        dir.join("cpu.max"),
-                        format!("{CPU_PERIOD_US} {CPU_PERIOD_US}"),
-                    );
-                }
                 group.cpu_usage = dir.join("cpu.stat");
+                limits.core.map(|core| (dir, core))
             }
-        }
-        group.cpu_counter = super::proctree::OpenCounter::open(&group.cpu_usage);
-        if group.kept.is_some() {
+        };
+        if reuse {
             // Whatever a runner killed before it could empty the cgroup left behind.
             group.kill_all();
             // A process that ended but was not yet reaped (bubblewrap's init, orphaned
             // when bubblewrap exits first, waits for the host's init) still counts
             // against the process limit: such a cgroup waits for a later match.
-            if read_counter_file(&group.pids.join("pids.current")).unwrap_or(0) > 0 {
+            if !group.members().is_empty()
+                || read_counter_file(&group.pids.join("pids.current")).unwrap_or(0) > 0
+            {
                 return Err(std::io::Error::other(
-                    "a kept cgroup still counts processes that ended",
+                    "a kept cgroup still counts processes",
                 ));
             }
+        }
+        group.limit(limits.memory_bytes, limits.pids)?;
+        group.hold_to_one_core(pin)?;
+        group.cpu_counter = super::proctree::OpenCounter::open(&group.cpu_usage);
+        if reuse {
             group.mark();
         }
         Ok(group)
     }
 }
 
-/// How many cgroups are kept on a host for one-shot matches.
+/// How many cgroups are kept for one-shot matches, in each hierarchy.
 const KEPT: usize = 16;
-
-/// Where the locks of the kept cgroups live (root's: cgroups are made as root).
-const KEPT_LOCK_DIR: &str = "/run/mazearena/cgroups";
-
-/// The folder name of kept cgroup `slot`.
-fn kept_name(slot: usize) -> String {
-    format!("run-{slot}")
-}
-
-/// Kept cgroup `slot`'s lock, if no other process holds it (and the lock folder can be
-/// made).
-fn lock_kept(dir: &Path, slot: usize) -> Option<Flock<std::fs::File>> {
-    use std::os::unix::fs::{DirBuilderExt, OpenOptionsExt};
-    if slot == 0 {
-        std::fs::DirBuilder::new()
-            .recursive(true)
-            .mode(0o700)
-            .create(dir)
-            .ok()?;
-    }
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .mode(0o600)
-        .custom_flags(libc::O_CLOEXEC | libc::O_NOFOLLOW)
-        .open(dir.join(format!("{}.lock", kept_name(slot))))
-        .ok()?;
-    Flock::lock(file, FlockArg::LockExclusiveNonblock).ok()
-}
 
 /// Kills whatever is left in a match cgroup of a process that is gone, and removes it.
 fn remove_stale(dir: &Path) {
@@ -412,7 +355,7 @@ fn write_text(dir: &Path, file: &str, text: &str) -> std::io::Result<()> {
 }
 
 /// The cgroup of one running match. Dropping it kills every process left in it and
-/// removes it.
+/// removes it (a kept one, [`CgroupRoot::kept`], stays for the next match).
 #[derive(Debug)]
 pub struct MatchCgroup {
     dirs: Vec<PathBuf>,
@@ -424,6 +367,8 @@ pub struct MatchCgroup {
     cpu_counter: Option<super::proctree::OpenCounter>,
     /// The counters when the current match began (all zero for a cgroup of one match).
     marks: Marks,
+    /// Whether folders that stand are taken up (a kept cgroup's) rather than replaced.
+    reuse: bool,
     /// For a kept cgroup ([`CgroupRoot::kept`]), the lock that makes it this match's:
     /// it is emptied, not removed, when dropped.
     kept: Option<Flock<std::fs::File>>,
@@ -444,7 +389,7 @@ impl MatchCgroup {
         let exists = made
             .as_ref()
             .is_err_and(|e| e.kind() == std::io::ErrorKind::AlreadyExists);
-        if exists && self.kept.is_some() {
+        if exists && self.reuse {
             // A kept cgroup, taken up again.
             made = Ok(());
         } else if exists {
@@ -473,6 +418,75 @@ impl MatchCgroup {
             CgroupRoot::V2 { .. } => "cgroup.procs",
         };
         self.dirs.iter().map(|d| d.join(file)).collect()
+    }
+
+    /// Holds every process to one core: a cpuset of `pin`'s core (its folder, and the
+    /// core) where there is one, else a CPU quota of one core. A kept cgroup also loses
+    /// what its last match had and this one does not: the quota (v2, or v1's cpu
+    /// controller mounted with cpuacct, whose folder this match joins) or the core (v2).
+    ///
+    /// # Errors
+    /// The file system errors of writing them.
+    fn hold_to_one_core(&self, pin: Option<(PathBuf, usize)>) -> std::io::Result<()> {
+        let quota = format!("{CPU_PERIOD_US} {CPU_PERIOD_US}");
+        match &self.version {
+            CgroupRoot::V1 {
+                cpuset,
+                cpu,
+                cpuacct,
+                ..
+            } => {
+                let acct = self.cpu_usage.parent().map(Path::to_path_buf);
+                let shared = cpu.as_ref() == Some(cpuacct);
+                match pin {
+                    Some((dir, core)) => {
+                        // A v1 cpuset takes no process before it has memory nodes.
+                        if let Some(cpuset) = cpuset {
+                            copy_file(cpuset, &dir, "cpuset.mems")?;
+                        }
+                        write(&dir, "cpuset.cpus", core as u64)?;
+                        if shared
+                            && self.reuse
+                            && let Some(acct) = &acct
+                        {
+                            write_text(acct, "cpu.cfs_quota_us", "-1")?;
+                        }
+                    }
+                    None => {
+                        let dir = match (cpu, shared) {
+                            (Some(_), true) => acct,
+                            (Some(cpu), false) => {
+                                self.dirs.iter().find(|d| d.starts_with(cpu)).cloned()
+                            }
+                            (None, _) => None,
+                        };
+                        if let Some(dir) = dir {
+                            write(&dir, "cpu.cfs_period_us", CPU_PERIOD_US)?;
+                            write(&dir, "cpu.cfs_quota_us", CPU_PERIOD_US)?;
+                        }
+                    }
+                }
+            }
+            CgroupRoot::V2 { .. } => {
+                let dir = &self.pids;
+                let _ = std::fs::write(dir.join("memory.swap.max"), "0");
+                // Without the cpuset controller the file is missing and the write fails.
+                let pinned =
+                    pin.is_some_and(|(_, core)| write(dir, "cpuset.cpus", core as u64).is_ok());
+                if pinned {
+                    if self.reuse {
+                        let _ = std::fs::write(dir.join("cpu.max"), format!("max {CPU_PERIOD_US}"));
+                    }
+                } else {
+                    let _ = std::fs::write(dir.join("cpu.max"), quota);
+                    if self.reuse {
+                        // The parent's cores.
+                        let _ = std::fs::write(dir.join("cpuset.cpus"), "");
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Sets the memory limit (resident, all processes; `None`: none) and the process
@@ -603,6 +617,7 @@ impl Drop for MatchCgroup {
     fn drop(&mut self) {
         self.kill_all();
         if self.kept.is_some() {
+            // Kept for the next one-shot match; its lock goes with it.
             return;
         }
         for dir in self.dirs.iter().rev() {
@@ -760,6 +775,69 @@ fn detect_v2(own: &str, mountinfo: &str) -> Result<CgroupRoot, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A cgroup hierarchy stood in for by plain folders: what a match cgroup writes
+    /// there can be read back.
+    fn read(dir: &Path, file: &str) -> String {
+        std::fs::read_to_string(dir.join(file)).unwrap_or_default()
+    }
+
+    fn limits(core: Option<usize>) -> CgroupLimits {
+        CgroupLimits {
+            memory_bytes: Some(64 << 20),
+            pids: Some(8),
+            core,
+        }
+    }
+
+    #[test]
+    fn a_kept_v2_cgroup_loses_its_last_matchs_core_or_quota() {
+        let tmp = tempfile::tempdir().unwrap();
+        let root = CgroupRoot::V2 {
+            base: tmp.path().to_path_buf(),
+        };
+        let dir = tmp.path().join("run-0");
+        // Unpinned first: a quota of one core. (Each is forgotten, not dropped: a
+        // dropped one, not held as kept, would be removed.)
+        std::mem::forget(root.build("run-0", limits(None), true).unwrap());
+        assert_eq!(read(&dir, "cpu.max"), "100000 100000");
+        // Then pinned: its core, and no quota left.
+        std::mem::forget(root.build("run-0", limits(Some(1)), true).unwrap());
+        assert_eq!(read(&dir, "cpuset.cpus"), "1");
+        assert_eq!(read(&dir, "cpu.max"), "max 100000");
+        assert_eq!(read(&dir, "pids.max"), "8");
+        // Then unpinned again: the parent's cores, and the quota.
+        std::mem::forget(root.build("run-0", limits(None), true).unwrap());
+        assert_eq!(read(&dir, "cpuset.cpus"), "");
+        assert_eq!(read(&dir, "cpu.max"), "100000 100000");
+    }
+
+    #[test]
+    fn a_kept_v1_cgroup_with_cpu_and_cpuacct_together_loses_its_last_matchs_quota() {
+        let tmp = tempfile::tempdir().unwrap();
+        let folder = |name: &str| {
+            let dir = tmp.path().join(name);
+            std::fs::create_dir(&dir).unwrap();
+            dir
+        };
+        let acct = folder("cpu,cpuacct");
+        let cpuset = folder("cpuset");
+        std::fs::write(cpuset.join("cpuset.mems"), "0\n").unwrap();
+        let root = CgroupRoot::V1 {
+            memory: folder("memory"),
+            pids: folder("pids"),
+            cpuacct: acct.clone(),
+            cpu: Some(acct.clone()),
+            cpuset: Some(cpuset.clone()),
+        };
+        let dir = acct.join("run-0");
+        std::mem::forget(root.build("run-0", limits(None), true).unwrap());
+        assert_eq!(read(&dir, "cpu.cfs_quota_us"), "100000");
+        std::mem::forget(root.build("run-0", limits(Some(1)), true).unwrap());
+        assert_eq!(read(&dir, "cpu.cfs_quota_us"), "-1");
+        assert_eq!(read(&cpuset.join("run-0"), "cpuset.cpus"), "1");
+        assert_eq!(read(&cpuset.join("run-0"), "cpuset.mems"), "0");
+    }
 
     #[test]
     fn counters_are_read_by_key() {

@@ -91,7 +91,8 @@ pub struct OpenCounter {
 }
 
 /// The most bytes of a counter file [`OpenCounter::read_with`] reads: `cpuacct.usage`
-/// holds one number, a v2 `cpu.stat` six lines (about 150 bytes).
+/// holds one number, a v2 `cpu.stat` six to nine lines (150-250 bytes, `usage_usec`
+/// first).
 const COUNTER_BYTES: usize = 512;
 
 impl OpenCounter {
