@@ -30,6 +30,10 @@
 # 5. The floor of a one-shot sandbox: bubblewrap making the same namespaces (PID,
 #    network, IPC, UTS, mount) with only /usr in the view and running /usr/bin/true,
 #    against /usr/bin/true alone, in turn (medians of the paired differences).
+# 6. The floor of a warm match: benches/warm_floor.c starts /usr/bin/true 500 times
+#    plainly and 500 times in a world of its own with the warm sandbox's mounts and
+#    walls (and nothing of mazearena's), in turn RUNS times: what the kernel's own work
+#    for a warm match's isolation costs, beside what the C kit's tournament allows.
 #
 # With BASELINE=path/to/an/earlier/mazearena, each sandboxed measure is also taken with it,
 # in turn with the others (its stages too).
@@ -130,6 +134,16 @@ for i in $(seq $((RUNS * 3))); do
   echo "$(timed /usr/bin/true) $(timed bwrap "${floor_ns[@]}" /usr/bin/true)"
 done >"$tmp/floor.txt"
 
+# The floor of a warm match (benches/warm_floor.c): 500 rounds of /usr/bin/true in the
+# C kit's folder, started plainly and in a world of its own with the warm sandbox's
+# walls, in turn; wall time and the machine's CPU time a round.
+gcc -O2 -o "$tmp/warm_floor" benches/warm_floor.c
+mkdir "$tmp/wf"
+chmod 755 "$tmp" "$tmp/wf"
+for i in $(seq "$RUNS"); do
+  echo "$("$tmp/warm_floor" plain 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true) $("$tmp/warm_floor" isolated 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true)"
+done >"$tmp/warm_floor.txt"
+
 python3 - "$tmp" "$RUNS" "$BASELINE" <<'PY'
 import os, statistics, sys
 tmp, runs, baseline = sys.argv[1], int(sys.argv[2]), sys.argv[3]
@@ -219,6 +233,21 @@ print("|---|---:|")
 print(f"| `--sandbox none` | {med(n_match) / 1000:.2f} |")
 print(f"| `--sandbox full` (a warm sandbox) | {med(f_match) / 1000:.2f} |")
 print(f"| the warm sandbox's cost per match (paired differences) | **{med(f - n for f, n in zip(f_match, n_match)) / 1000:.2f}** |")
+print()
+wf = [tuple(float(x) for x in l.split()) for l in open(f"{tmp}/warm_floor.txt")]
+wf_wall = med(r[2] - r[0] for r in wf)
+wf_cpu = med(r[3] - r[1] for r in wf)
+print(f"| the floor of a warm match: benches/warm_floor.c, 500 rounds of `/usr/bin/true` ({len(wf)} runs, in turn, medians) | wall (ms a round) | the machine's CPU (ms a round) |")
+print("|---|---:|---:|")
+print(f"| started plainly (`posix_spawn`) | {med(r[0] for r in wf):.3f} | {med(r[1] for r in wf):.3f} |")
+print(f"| in new PID, mount and IPC namespaces with the warm sandbox's mounts and walls | {med(r[2] for r in wf):.3f} | {med(r[3] for r in wf):.3f} |")
+print(f"| the floor of a warm match's isolation (paired differences) | **{wf_wall:.3f}** | **{wf_cpu:.3f}** |")
+print()
+none_cpu = med(r[1] for r in t["none"]) / t["none"][0][2]
+full_cpu = med(r[1] for r in t["full"]) / t["full"][0][2]
+print(f"The C kit's match takes {none_cpu:.2f} ms of the machine's CPU without the sandbox and {full_cpu:.2f} ms in it (the tournament above): "
+      f"0.9x its throughput allows {none_cpu / 0.9 - none_cpu:.2f} ms more a match; "
+      f"a sandbox that did only the floor's work would be at {none_cpu / (none_cpu + wf_cpu):.2f}x.")
 print()
 floor = [tuple(int(x) for x in l.split()) for l in open(f"{tmp}/floor.txt")]
 print(f"| the one-shot floor ({len(floor)} runs, in turn, medians) | ms |")
