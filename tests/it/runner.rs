@@ -178,12 +178,15 @@ async fn one_shot_matches_in_a_row_each_count_only_their_own_cpu_time() {
     }
 }
 
-#[test]
-fn a_kept_cgroup_that_still_counts_an_ended_process_is_not_taken_up() {
-    use mazearena::runner::sandbox::cgroup::CgroupLimits;
+/// The cgroups of one-shot matches and a match's limits, where kept cgroups are made
+/// (as root with cgroups; CI=true has them); `None`, with the reason printed, elsewhere.
+fn kept_cgroups() -> Option<(
+    mazearena::runner::sandbox::cgroup::CgroupRoot,
+    mazearena::runner::sandbox::cgroup::CgroupLimits,
+)> {
     let Sandbox::Full(full) = sandbox() else {
         println!("SKIP: no sandbox here");
-        return;
+        return None;
     };
     let root = match (&full.cgroups, nix::unistd::geteuid().is_root()) {
         (Ok(root), true) => root.clone(),
@@ -193,13 +196,76 @@ fn a_kept_cgroup_that_still_counts_an_ended_process_is_not_taken_up() {
                 "CI=true runs as root with cgroups: {e:?}"
             );
             println!("SKIP: kept cgroups are made as root with cgroups");
-            return;
+            return None;
         }
     };
-    let limits = CgroupLimits {
+    let limits = mazearena::runner::sandbox::cgroup::CgroupLimits {
         memory_bytes: Some(64 << 20),
         pids: Some(8),
         core: None,
+    };
+    Some((root, limits))
+}
+
+#[test]
+fn a_process_left_in_a_kept_cgroup_dies_before_the_next_match_takes_it_up() {
+    // A runner killed before it could empty its kept cgroup leaves its bot there,
+    // running: whichever match takes the cgroup up next kills it first.
+    let Some((root, limits)) = kept_cgroups() else {
+        return;
+    };
+    let first = root.kept(limits).unwrap();
+    let files = first.join_files();
+    drop(first);
+    let script = files
+        .iter()
+        .map(|f| format!("echo $$ > {}", f.display()))
+        .chain(["exec sleep 60".to_string()])
+        .collect::<Vec<_>>()
+        .join("; ");
+    let mut left = std::process::Command::new("sh")
+        .args(["-c", &script])
+        .spawn()
+        .unwrap();
+    let procs = files[0].with_file_name("cgroup.procs");
+    let until = std::time::Instant::now() + Duration::from_secs(10);
+    while std::fs::read_to_string(&procs).unwrap().trim().is_empty() {
+        assert!(
+            std::time::Instant::now() < until,
+            "the process never joined"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // Every free kept cgroup is taken up until that one is: the others stay held, so
+    // that one is taken up either here or by a match of another test.
+    let mut held = Vec::new();
+    for _ in 0..=16 {
+        let group = root.kept(limits).unwrap();
+        let same = group.join_files() == files;
+        held.push(group);
+        if same {
+            break;
+        }
+    }
+    let until = std::time::Instant::now() + Duration::from_secs(5);
+    let status = loop {
+        if let Some(status) = left.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            std::time::Instant::now() < until,
+            "the process left in a kept cgroup still runs"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert!(status.code().is_none(), "killed, not ended: {status:?}");
+    drop(held);
+}
+
+#[test]
+fn a_kept_cgroup_that_still_counts_an_ended_process_is_not_taken_up() {
+    let Some((root, limits)) = kept_cgroups() else {
+        return;
     };
     let first = root.kept(limits).unwrap();
     let files = first.join_files();

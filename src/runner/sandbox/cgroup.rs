@@ -260,7 +260,7 @@ impl CgroupRoot {
         };
         // The folders first, every limit after: a kept cgroup is emptied in between, so
         // that no process left in it meets this match's limits.
-        let pin = match self {
+        let (pin, quota) = match self {
             CgroupRoot::V1 {
                 memory,
                 pids,
@@ -278,19 +278,21 @@ impl CgroupRoot {
                     (Some(core), Some(cpuset)) => Some((group.make(&cpuset.join(name))?, core)),
                     _ => None,
                 };
-                if pin.is_none()
-                    && let Some(cpu) = cpu.as_ref().filter(|c| *c != cpuacct)
-                {
-                    group.make(&cpu.join(name))?;
-                }
-                pin
+                // Unpinned, a quota of one core: in the cpu controller's own folder, or
+                // in cpuacct's where the two are mounted together.
+                let quota = match (&pin, cpu) {
+                    (None, Some(cpu)) if cpu != cpuacct => Some(group.make(&cpu.join(name))?),
+                    (None, Some(_)) => Some(acct),
+                    _ => None,
+                };
+                (pin, quota)
             }
             CgroupRoot::V2 { base } => {
                 let dir = group.make(&base.join(name))?;
                 group.memory = dir.clone();
                 group.pids = dir.clone();
                 group.cpu_usage = dir.join("cpu.stat");
-                limits.core.map(|core| (dir, core))
+                (limits.core.map(|core| (dir, core)), None)
             }
         };
         if reuse {
@@ -308,7 +310,7 @@ impl CgroupRoot {
             }
         }
         group.limit(limits.memory_bytes, limits.pids)?;
-        group.hold_to_one_core(pin)?;
+        group.hold_to_one_core(pin, quota)?;
         group.cpu_counter = super::proctree::OpenCounter::open(&group.cpu_usage);
         if reuse {
             group.mark();
@@ -421,14 +423,18 @@ impl MatchCgroup {
     }
 
     /// Holds every process to one core: a cpuset of `pin`'s core (its folder, and the
-    /// core) where there is one, else a CPU quota of one core. A kept cgroup also loses
+    /// core) where there is one, else a CPU quota of one core (v1: in the `quota`
+    /// folder, where there is a cpu controller). A kept cgroup also loses
     /// what its last match had and this one does not: the quota (v2, or v1's cpu
     /// controller mounted with cpuacct, whose folder this match joins) or the core (v2).
     ///
     /// # Errors
     /// The file system errors of writing them.
-    fn hold_to_one_core(&self, pin: Option<(PathBuf, usize)>) -> std::io::Result<()> {
-        let quota = format!("{CPU_PERIOD_US} {CPU_PERIOD_US}");
+    fn hold_to_one_core(
+        &self,
+        pin: Option<(PathBuf, usize)>,
+        quota: Option<PathBuf>,
+    ) -> std::io::Result<()> {
         match &self.version {
             CgroupRoot::V1 {
                 cpuset,
@@ -436,8 +442,6 @@ impl MatchCgroup {
                 cpuacct,
                 ..
             } => {
-                let acct = self.cpu_usage.parent().map(Path::to_path_buf);
-                let shared = cpu.as_ref() == Some(cpuacct);
                 match pin {
                     Some((dir, core)) => {
                         // A v1 cpuset takes no process before it has memory nodes.
@@ -445,22 +449,17 @@ impl MatchCgroup {
                             copy_file(cpuset, &dir, "cpuset.mems")?;
                         }
                         write(&dir, "cpuset.cpus", core as u64)?;
-                        if shared
+                        // cpu mounted with cpuacct: this match's folder may hold the last
+                        // one's quota.
+                        if cpu.as_ref() == Some(cpuacct)
                             && self.reuse
-                            && let Some(acct) = &acct
+                            && let Some(acct) = self.cpu_usage.parent()
                         {
                             write_text(acct, "cpu.cfs_quota_us", "-1")?;
                         }
                     }
                     None => {
-                        let dir = match (cpu, shared) {
-                            (Some(_), true) => acct,
-                            (Some(cpu), false) => {
-                                self.dirs.iter().find(|d| d.starts_with(cpu)).cloned()
-                            }
-                            (None, _) => None,
-                        };
-                        if let Some(dir) = dir {
+                        if let Some(dir) = quota {
                             write(&dir, "cpu.cfs_period_us", CPU_PERIOD_US)?;
                             write(&dir, "cpu.cfs_quota_us", CPU_PERIOD_US)?;
                         }
@@ -478,7 +477,10 @@ impl MatchCgroup {
                         let _ = std::fs::write(dir.join("cpu.max"), format!("max {CPU_PERIOD_US}"));
                     }
                 } else {
-                    let _ = std::fs::write(dir.join("cpu.max"), quota);
+                    let _ = std::fs::write(
+                        dir.join("cpu.max"),
+                        format!("{CPU_PERIOD_US} {CPU_PERIOD_US}"),
+                    );
                     if self.reuse {
                         // The parent's cores.
                         let _ = std::fs::write(dir.join("cpuset.cpus"), "");
@@ -837,6 +839,31 @@ mod tests {
         assert_eq!(read(&dir, "cpu.cfs_quota_us"), "-1");
         assert_eq!(read(&cpuset.join("run-0"), "cpuset.cpus"), "1");
         assert_eq!(read(&cpuset.join("run-0"), "cpuset.mems"), "0");
+    }
+
+    #[test]
+    fn an_unpinned_v1_cgroup_has_its_quota_in_the_cpu_controllers_own_folder() {
+        let tmp = tempfile::tempdir().unwrap();
+        let folder = |name: &str| {
+            let dir = tmp.path().join(name);
+            std::fs::create_dir(&dir).unwrap();
+            dir
+        };
+        let cpu = folder("cpu");
+        let root = CgroupRoot::V1 {
+            memory: folder("memory"),
+            pids: folder("pids"),
+            cpuacct: folder("cpuacct"),
+            cpu: Some(cpu.clone()),
+            cpuset: None,
+        };
+        std::mem::forget(root.build("run-0", limits(Some(1)), true).unwrap());
+        assert_eq!(read(&cpu.join("run-0"), "cpu.cfs_period_us"), "100000");
+        assert_eq!(read(&cpu.join("run-0"), "cpu.cfs_quota_us"), "100000");
+        assert_eq!(
+            read(&tmp.path().join("cpuacct/run-0"), "cpu.cfs_quota_us"),
+            ""
+        );
     }
 
     #[test]
