@@ -215,11 +215,11 @@ block=$(python3 .ci/readme_podman.py script 1)
 eval "$block" >/tmp/mazearena-image-block.out 2>"$STEP_LOG"
 api=http://127.0.0.1:8081
 for _ in $(seq 100); do
-  workers=$(curl -s "$api/healthz" | json 'sum(1 for w in d["workers"] if w["role"] == "worker" and w["sandbox"] == "full")' 2>/dev/null || true)
+  workers=$(curl -s "$api/healthz" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN" | json 'sum(1 for w in d["workers"] if w["role"] == "worker" and w["sandbox"] == "full")' 2>/dev/null || true)
   [ "$workers" = 2 ] && break
   sleep 0.2
 done
-[ "$workers" = 2 ] || fail "two sandboxed workers in /healthz: $(curl -s "$api/healthz")"
+[ "$workers" = 2 ] || fail "two sandboxed workers in /healthz: $(curl -s "$api/healthz" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN")"
 say "API up, two workers with the full sandbox"
 
 upload py "python3 simple_bot.py" bots/python simple_bot.py mazebot.py >/dev/null || fail "upload"
@@ -252,7 +252,7 @@ print("; ".join(bad))' "$BIN" "$ids" "${mazes[@]}")
 [ -z "$bad" ] || fail "the tournament's matches: $bad"
 # Each worker reports its count every few seconds.
 for _ in $(seq 60); do
-  done_by=$(curl -s "$api/healthz" | json '" ".join(str(w["matches_done"]) for w in d["workers"] if w["role"] == "worker")')
+  done_by=$(curl -s "$api/healthz" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN" | json '" ".join(str(w["matches_done"]) for w in d["workers"] if w["role"] == "worker")')
   [ $((${done_by// /+})) = 12 ] && break
   sleep 0.25
 done

@@ -16,8 +16,9 @@ pub enum Caller {
     Anonymous,
     /// The admin token.
     Admin,
-    /// An organiser's key, by its hash: manages competitions and sees what they seal.
-    Organiser(String),
+    /// An organiser's key (the organiser's id): makes competitions, and manages and
+    /// sees what seals the ones it owns.
+    Organiser(i64),
     /// Some other token (maybe a bot's owner token), by its hash.
     Token(String),
 }
@@ -46,8 +47,8 @@ impl FromRequestParts<AppState> for Caller {
         let hash = hash_token(token);
         if hash == state.settings.admin_token_hash {
             Ok(Caller::Admin)
-        } else if state.storage.is_organiser(&hash).await? {
-            Ok(Caller::Organiser(hash))
+        } else if let Some(id) = state.storage.organiser_by_key(&hash).await? {
+            Ok(Caller::Organiser(id))
         } else {
             Ok(Caller::Token(hash))
         }
@@ -60,10 +61,80 @@ impl Caller {
         matches!(self, Caller::Admin)
     }
 
-    /// Whether this is the admin or an organiser: may manage competitions and see what
-    /// they seal (the private sets before the close, the final run before the results).
+    /// Whether this is the admin or an organiser: may make competitions.
     pub fn can_organise(&self) -> bool {
         matches!(self, Caller::Admin | Caller::Organiser(_))
+    }
+
+    /// Whether this is the admin or the organiser competition `c` belongs to: may
+    /// change it and see what it seals (the final run before the results).
+    pub fn organises(&self, c: &crate::storage::competitions::CompetitionRow) -> bool {
+        match self {
+            Caller::Admin => true,
+            Caller::Organiser(id) => c.organiser_id == Some(*id),
+            Caller::Anonymous | Caller::Token(_) => false,
+        }
+    }
+
+    /// Whether the caller may see tournament `t`: any caller an unsealed one; a sealed one
+    /// (a competition's, before its results) the admin and that competition's organiser.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn sees_tournament(
+        &self,
+        state: &AppState,
+        t: &crate::storage::tournaments::TournamentRow,
+    ) -> Result<bool, ApiError> {
+        Ok(!t.sealed
+            || self
+                .organises_competition_of(state, t.competition_id)
+                .await?)
+    }
+
+    /// Whether the caller is the admin or the organiser of competition `competition_id`
+    /// (`None`: no competition, the admin only).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn organises_competition_of(
+        &self,
+        state: &AppState,
+        competition_id: Option<i64>,
+    ) -> Result<bool, ApiError> {
+        Ok(match (self, competition_id) {
+            (Caller::Admin, _) => true,
+            (Caller::Organiser(_), Some(id)) => state
+                .storage
+                .get_competition_by_id(id)
+                .await?
+                .is_some_and(|c| self.organises(&c)),
+            _ => false,
+        })
+    }
+
+    /// Refuses anyone but the admin and the organiser competition `c` belongs to: 401
+    /// without a token, 403 with another one (another organiser's included).
+    ///
+    /// # Errors
+    /// As said.
+    pub fn require_organiser_of(
+        &self,
+        c: &crate::storage::competitions::CompetitionRow,
+    ) -> Result<(), ApiError> {
+        if self.organises(c) {
+            return Ok(());
+        }
+        Err(match self {
+            Caller::Anonymous => ApiError::Unauthorized(format!(
+                "this needs the key of competition {}'s organiser or the admin token (Authorization: Bearer TOKEN)",
+                c.name
+            )),
+            _ => ApiError::Forbidden(format!(
+                "competition {} belongs to another organiser: this needs its organiser's key or the admin token",
+                c.name
+            )),
+        })
     }
 
     /// Refuses anyone but the admin and the organisers: 401 without a token, 403 with

@@ -128,7 +128,8 @@ pub struct CompetitionView {
     pub closes_at: Option<Timestamp>,
     /// Matches per version per ranking maze.
     pub repeats: i64,
-    /// The final run's matches per selected version per private maze (0: none).
+    /// The final run's matches per selected version per private maze (0: as many as
+    /// `repeats`).
     pub final_repeats: i64,
     /// Versions per entrant per 24 hours.
     pub versions_per_day: i64,
@@ -150,6 +151,8 @@ pub struct CompetitionView {
     pub seeds: Option<Vec<i64>>,
     /// The public set's tournament (its matches show how each went, not the scores).
     pub public_tournament_id: Option<i64>,
+    /// After the close: how far the final run (the private set's only run) has played.
+    pub final_run: Option<ops::RunProgress>,
 }
 
 /// Competition `c` as `caller` may see it.
@@ -160,7 +163,7 @@ pub(super) async fn view(
 ) -> ApiResult<CompetitionView> {
     let now = now_ms();
     let timeline = ops::timeline(c);
-    let organiser = caller.can_organise();
+    let organiser = caller.organises(c);
     let revealed = c.state.as_deref() == Some("final") && c.reveal_private_mazes;
     let mazes = state
         .storage
@@ -206,6 +209,7 @@ pub(super) async fn view(
             .len(),
         seeds,
         public_tournament_id: c.public_tournament_id,
+        final_run: ops::final_progress(&state.storage, c).await?,
     })
 }
 
@@ -232,7 +236,8 @@ async fn list_competitions(
 }
 
 /// Create a competition (organisers and the admin): its settings and its three maze
-/// sets, each maze given by its text (numeric or ASCII format).
+/// sets, each maze given by its text (numeric or ASCII format). It belongs to the
+/// organiser who made it (the admin's, if the admin did).
 #[utoipa::path(post, path = "/api/competitions", tag = "competitions",
     request_body = Spec<MazeText>, security(("bearer" = [])),
     responses((status = 201, body = CompetitionView), (status = 400, body = ErrorBody),
@@ -244,7 +249,11 @@ async fn create_competition(
     AppJson(spec): AppJson<Spec<MazeText>>,
 ) -> ApiResult<(StatusCode, axum::Json<CompetitionView>)> {
     caller.require_organiser()?;
-    let c = ops::create(&state.storage, spec).await?;
+    let owner = match caller {
+        Caller::Organiser(id) => Some(id),
+        _ => None,
+    };
+    let c = ops::create(&state.storage, spec, owner).await?;
     Ok((
         StatusCode::CREATED,
         axum::Json(view(&state, &c, &caller).await?),
@@ -264,8 +273,9 @@ async fn get_competition(
     Ok(axum::Json(view(&state, &c, &caller).await?))
 }
 
-/// Edit a competition (organisers and the admin). Once open its opening stays; once
-/// closed only its texts change. A close moved to now (or earlier) closes it now.
+/// Edit a competition (its organiser and the admin; `organiser`, which hands it to
+/// another organiser, the admin only). Once open its opening stays; once closed only
+/// its texts change. A close moved to now (or earlier) closes it now.
 #[utoipa::path(patch, path = "/api/competitions/{name}", tag = "competitions",
     params(("name" = String, Path, description = "competition name")),
     request_body = Patch, security(("bearer" = [])),
@@ -278,8 +288,11 @@ async fn edit_competition(
     AppPath(name): AppPath<String>,
     AppJson(patch): AppJson<Patch>,
 ) -> ApiResult<axum::Json<CompetitionView>> {
-    caller.require_organiser()?;
     let c = find(&state, &name).await?;
+    caller.require_organiser_of(&c)?;
+    if patch.organiser.is_some() {
+        caller.require_admin()?;
+    }
     let c = ops::edit(&state.storage, c, patch, now_ms()).await?;
     Ok(axum::Json(view(&state, &c, &caller).await?))
 }
@@ -380,8 +393,9 @@ pub struct BoardQuery {
 }
 
 /// A leaderboard of the competition: `public` (the public ranking set; frozen before
-/// the close if the competition says so) or `private` (sealed until the close for
-/// anyone but organisers). Each entrant's latest version that has played all its
+/// the close if the competition says so) or `private` (the final run's, played after
+/// the close: sealed until the results, for its organisers until the final run has
+/// played; `final_run` says how far it is). Each entrant's latest version that has played all its
 /// matches there.
 #[utoipa::path(get, path = "/api/competitions/{name}/leaderboard", tag = "competitions",
     params(("name" = String, Path, description = "competition name"), BoardQuery),
@@ -398,7 +412,7 @@ async fn leaderboard(
         return Ok(axum::Json(default_board(&state, &caller, kind).await?));
     }
     Ok(axum::Json(
-        ops::board(&state.storage, &c, kind, caller.can_organise(), now_ms()).await?,
+        ops::board(&state.storage, &c, kind, caller.organises(&c), now_ms()).await?,
     ))
 }
 
@@ -419,6 +433,7 @@ pub(super) async fn default_board(
         board: kind,
         sealed: false,
         frozen_at: None,
+        final_run: None,
         standings: rows
             .into_iter()
             .map(|r| BoardLine {
@@ -629,13 +644,18 @@ async fn final_results(
 ) -> ApiResult<(CompetitionRow, Vec<ResultRow>)> {
     let c = find(state, name).await?;
     if c.state.as_deref() != Some("final") {
-        return Err(ApiError::Conflict(match c.closes_at {
-            Some(t) => format!(
+        let progress = ops::final_progress(&state.storage, &c).await?;
+        return Err(ApiError::Conflict(match (c.closes_at, progress) {
+            (_, Some(p)) => format!(
+                "the final run of competition {} is playing: {} of {} matches played; the results come when it has played",
+                c.name, p.played, p.total
+            ),
+            (Some(t), None) => format!(
                 "the results of competition {} come after its close ({} UTC) and its final run",
                 c.name,
                 Timestamp(t).rfc3339()
             ),
-            None => "the default competition has no final results".into(),
+            (None, None) => "the default competition has no final results".into(),
         }));
     }
     let rows = ops::results(&state.storage, &c).await?;

@@ -45,9 +45,14 @@ async fn get_leaderboard(
                 .storage
                 .get_tournament(id)
                 .await?
-                .filter(|t| !t.sealed || caller.can_organise())
                 .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-            if let Some(c) = t.competition_id.filter(|_| !caller.can_organise()) {
+            if !caller.sees_tournament(&state, &t).await? {
+                return Err(ApiError::NotFound(format!("no tournament {id}")));
+            }
+            let organises = caller
+                .organises_competition_of(&state, t.competition_id)
+                .await?;
+            if let Some(c) = t.competition_id.filter(|_| !organises) {
                 return Err(competition_standings_elsewhere(&state, id, c).await?);
             }
             Scope::Tournament(id)
@@ -124,22 +129,21 @@ pub(super) async fn settled_for_caller(
     Ok(for_caller(kept, caller))
 }
 
-/// The standings as `caller` may see them: without the score/optimum ratio of a bot
-/// whose counted matches include a hidden maze, unless the caller is the admin.
 /// A tournament's standings as `caller` may see them, and whether they are sealed:
 /// while a tournament with hidden mazes is not complete, anyone but the admin gets no
 /// standings (each match's result would show as the change in its bot's mean); a
 /// competition's tournament (`in_competition`) shows its standings to the admin and
-/// organisers only (everyone else reads them on the competition's boards, under its
+/// that competition's organiser (`organises`) only (everyone else reads them on the competition's boards, under its
 /// rules: the freeze, the private set sealed).
 pub(super) fn tournament_for_caller(
     rows: Vec<Standing>,
     caller: &Caller,
     complete: bool,
     in_competition: bool,
+    organises: bool,
 ) -> (Vec<Standing>, bool) {
     let sealed = if in_competition {
-        !caller.can_organise()
+        !organises
     } else {
         !caller.is_admin() && !complete && rows.iter().any(|r| r.hidden_played > 0)
     };
@@ -150,10 +154,24 @@ pub(super) fn tournament_for_caller(
     }
 }
 
+/// The standings as `caller` may see them: without the score/optimum ratio of a bot
+/// whose counted matches include a hidden maze, and with the uncertainty withheld
+/// ([`crate::ranking::withheld`]) where any line counts a hidden maze, unless the
+/// caller is the admin.
 pub(super) fn for_caller(mut rows: Vec<Standing>, caller: &Caller) -> Vec<Standing> {
     if !caller.is_admin() {
         for row in rows.iter_mut().filter(|r| r.hidden_played > 0) {
             row.mean_ratio = None;
+        }
+        // Intervals, rank ranges and tie groups over hidden matches would tell single
+        // matches (crate::ranking, "Hidden matches"): the means and ranks only.
+        if rows.iter().any(|r| r.hidden_played > 0) {
+            crate::registry::rankings::withhold_lines(
+                &mut rows,
+                |r| r.rank,
+                |r| r.mean_score,
+                |r, u| r.uncertainty = u,
+            );
         }
     }
     rows

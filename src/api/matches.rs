@@ -76,8 +76,9 @@ pub struct MatchView {
     pub maze_id: i64,
     /// The tournament, if any.
     pub tournament_id: Option<i64>,
-    /// The seed.
-    pub seed: i64,
+    /// The seed (null on a hidden maze's match, unless the caller is the admin: a
+    /// competition's seeds are secret until its results).
+    pub seed: Option<i64>,
     /// queued, running, finished, step_limit, timeout, crashed, protocol_error,
     /// memory_limit, process_limit, scratch_limit, aborted.
     pub status: String,
@@ -317,7 +318,7 @@ pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
         bot_version: row.version,
         maze_id: row.maze_id,
         tournament_id: row.tournament_id,
-        seed: row.seed,
+        seed: reveal.then_some(row.seed),
         score: row.score,
         run0_steps: row.run0_steps,
         run1_steps: row.run1_steps,
@@ -354,7 +355,9 @@ async fn list_matches(
     AppQuery(q): AppQuery<MatchListQuery>,
 ) -> ApiResult<axum::Json<MatchPage>> {
     let (mut filter, page) = q.parse()?;
-    filter.hide_sealed = !caller.can_organise();
+    // Sealed matches (a final run before the results) are listed to the admin only; a
+    // competition's organiser reads its boards.
+    filter.hide_sealed = !caller.is_admin();
     let (rows, count) = state.storage.list_matches(&filter, page).await?;
     let next_before = next_before(&rows, page);
     let admin = caller.is_admin();
@@ -536,15 +539,25 @@ pub(super) fn paused_error(bot_id: i64, reason: &str) -> ApiError {
 }
 
 /// Match `id` if `caller` may see it: a sealed tournament's match (a competition's
-/// private set before its close, its final run before the results) is not found for
-/// anyone but the admin and the organisers.
+/// final run before the results) is not found for anyone but the admin and that
+/// competition's organiser.
 async fn find_match(state: &AppState, caller: &Caller, id: i64) -> ApiResult<MatchRow> {
-    state
-        .storage
-        .get_match(id)
-        .await?
-        .filter(|m| !m.sealed || caller.can_organise())
-        .ok_or_else(|| ApiError::NotFound(format!("no match {id}")))
+    let not_found = || ApiError::NotFound(format!("no match {id}"));
+    let m = state.storage.get_match(id).await?.ok_or_else(not_found)?;
+    if m.sealed {
+        let competition = match m.tournament_id {
+            Some(t) => state
+                .storage
+                .get_tournament(t)
+                .await?
+                .and_then(|t| t.competition_id),
+            None => None,
+        };
+        if !caller.organises_competition_of(state, competition).await? {
+            return Err(not_found());
+        }
+    }
+    Ok(m)
 }
 
 /// Refuses new matches beyond the queue's capacity (429 with Retry-After).

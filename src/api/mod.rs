@@ -54,6 +54,8 @@ pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(30);
 pub struct Settings {
     /// SHA-256 of the admin token.
     pub admin_token_hash: String,
+    /// SHA-256 of the token that may read `/metrics` besides the admin's.
+    pub metrics_token_hash: Option<String>,
     /// The local data folder (uploads are checked in its `tmp` folder).
     pub data_dir: PathBuf,
     /// The most matches that may wait in the queue; beyond it, 429.

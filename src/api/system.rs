@@ -11,6 +11,7 @@ use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 use super::AppState;
+use super::auth::Caller;
 use super::error::{ApiError, ApiResult};
 use crate::storage::workers::WorkerRow;
 
@@ -33,13 +34,16 @@ async fn runtimes(
     axum::Json(state.runtimes.as_ref().clone())
 }
 
-/// Health of the server.
+/// Health of the server. The counts (`queued`, `workers`) are the admin's: they move
+/// with matches on hidden mazes, so anyone else gets the status and the server's kind
+/// of isolation only.
 #[derive(Debug, Serialize, ToSchema)]
 pub struct Health {
     /// `ok` when the database answers.
     pub status: &'static str,
-    /// Matches waiting to be played.
-    pub queued: i64,
+    /// Matches waiting to be played (the admin only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub queued: Option<i64>,
     /// How bots are isolated: `full` (the sandbox), `none` (started with
     /// `--sandbox none`: only for bots the operator trusts) or `unused` (an API server,
     /// `serve --jobs 0`, runs no bot; each of `workers` reports its own).
@@ -50,20 +54,28 @@ pub struct Health {
     /// `rlimit` (no sandbox: the address space only); `unused` on an API server.
     pub limits: &'static str,
     /// The processes playing matches (this server's pool and `mazearena worker`s, on any
-    /// machine) that reported within the last 30 seconds.
-    pub workers: Vec<WorkerRow>,
+    /// machine) that reported within the last 30 seconds, with their counts (the admin
+    /// only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub workers: Option<Vec<WorkerRow>>,
 }
 
-/// Liveness and database check.
+/// Liveness and database check: `ok`, or a 500 when the database does not answer. The
+/// admin also gets the queue's length and the workers.
 #[utoipa::path(get, path = "/healthz", tag = "system",
     responses((status = 200, body = Health), (status = 500, body = super::error::ErrorBody)))]
-async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>> {
+async fn healthz(State(state): State<AppState>, caller: Caller) -> ApiResult<axum::Json<Health>> {
     state.storage.ping().await?;
-    let queued = state.storage.queued_count().await?;
-    let workers = state
-        .storage
-        .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
-        .await?;
+    let (queued, workers) = if caller.is_admin() {
+        let queued = state.storage.queued_count().await?;
+        let workers = state
+            .storage
+            .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
+            .await?;
+        (Some(queued), Some(workers))
+    } else {
+        (None, None)
+    };
     Ok(axum::Json(Health {
         status: "ok",
         queued,
@@ -73,11 +85,34 @@ async fn healthz(State(state): State<AppState>) -> ApiResult<axum::Json<Health>>
     }))
 }
 
-/// Prometheus metrics: matches by status, queue depth, match duration histogram.
-#[utoipa::path(get, path = "/metrics", tag = "system",
+/// Prometheus metrics: matches by status, queue depth, match duration histogram. They
+/// count and time matches on hidden mazes, so they answer only the metrics token
+/// (`serve --metrics-token`, Prometheus' `bearer_token`) or the admin token.
+#[utoipa::path(get, path = "/metrics", tag = "system", security(("bearer" = [])),
     responses((status = 200, description = "Prometheus metrics in the OpenMetrics text format",
-        content_type = "application/openmetrics-text; version=1.0.0; charset=utf-8")))]
-async fn metrics(State(state): State<AppState>) -> ApiResult<Response> {
+        content_type = "application/openmetrics-text; version=1.0.0; charset=utf-8"),
+        (status = 401, body = super::error::ErrorBody), (status = 403, body = super::error::ErrorBody)))]
+async fn metrics(
+    State(state): State<AppState>,
+    headers: axum::http::HeaderMap,
+    caller: Caller,
+) -> ApiResult<Response> {
+    let metrics_token = headers
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.strip_prefix("Bearer "))
+        .map(|t| super::auth::hash_token(t.trim()));
+    let allowed = caller.is_admin()
+        || (metrics_token.is_some() && metrics_token == state.settings.metrics_token_hash);
+    if !allowed {
+        return Err(match caller {
+            Caller::Anonymous => ApiError::Unauthorized(
+                "/metrics needs the metrics token or the admin token (Authorization: Bearer TOKEN)"
+                    .into(),
+            ),
+            _ => ApiError::Forbidden("/metrics needs the metrics token or the admin token".into()),
+        });
+    }
     let text = state.metrics.render(&state.storage).await?;
     Ok((
         [(

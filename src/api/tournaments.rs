@@ -154,8 +154,13 @@ async fn get_tournament(
         .storage
         .get_tournament(id)
         .await?
-        .filter(|t| !t.sealed || caller.can_organise())
         .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+    if !caller.sees_tournament(&state, &t).await? {
+        return Err(ApiError::NotFound(format!("no tournament {id}")));
+    }
+    let organises = caller
+        .organises_competition_of(&state, t.competition_id)
+        .await?;
     let (standings, standings_sealed) = super::leaderboard::tournament_for_caller(
         state
             .ranker
@@ -164,6 +169,7 @@ async fn get_tournament(
         &caller,
         t.done >= t.total,
         t.competition_id.is_some(),
+        organises,
     );
     Ok(axum::Json(TournamentView {
         tournament_id: t.tournament_id,
@@ -228,7 +234,7 @@ async fn list_tournaments(
     let page = super::lists::page(q.offset, q.limit)?;
     let (rows, total) = state
         .storage
-        .list_tournaments(page, !caller.can_organise())
+        .list_tournaments(page, !caller.is_admin())
         .await?;
     Ok(axum::Json(TournamentPage {
         items: rows

@@ -72,11 +72,16 @@ pub enum CompetitionCommand {
         /// As JSON, with each row's manifest.
         #[arg(long)]
         json: bool,
+        /// Wait up to this many seconds for the results (a server playing the final run
+        /// writes them), printing the final run's progress as it moves.
+        #[arg(long, value_name = "SECS")]
+        wait: Option<u64>,
         #[command(flatten)]
         db: DatabaseArg,
     },
-    /// Register an organiser and print its key (shown once): it manages competitions
-    /// through the API and sees what they seal, and nothing else.
+    /// Register an organiser and print its key (shown once): it makes competitions
+    /// through the API, and manages and sees what seals the ones it made (or was handed
+    /// with `edit --organiser`), nothing else.
     Organiser {
         /// The organiser's name.
         name: String,
@@ -105,9 +110,12 @@ pub struct EditArgs {
     /// Practice matches per entrant per 24 hours.
     #[arg(long)]
     practice_per_day: Option<u32>,
-    /// The final run's repeats (0: none).
+    /// The final run's repeats (0: as many as `repeats`).
     #[arg(long)]
     final_repeats: Option<u32>,
+    /// Hand the competition to this organiser (registered with `competition organiser`).
+    #[arg(long)]
+    organiser: Option<String>,
     /// The final selection: latest, best_public or choice.
     #[arg(long)]
     selection: Option<String>,
@@ -129,7 +137,7 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
             CompetitionCommand::Create { file, db } => {
                 let spec = read_file(&file)?;
                 let storage = open(&db, true).await?;
-                let c = ops::create(&storage, spec).await?;
+                let c = ops::create(&storage, spec, None).await?;
                 print_line(&storage, &c).await?;
                 Ok(())
             }
@@ -137,7 +145,10 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                 let storage = open(&db, false).await?;
                 let c = find(&storage, &name).await?;
                 export(&storage, &c, &out).await?;
-                println!("wrote {} and its mazes", out.join("competition.toml").display());
+                println!(
+                    "wrote {} and its mazes",
+                    out.join("competition.toml").display()
+                );
                 Ok(())
             }
             CompetitionCommand::List { db } => {
@@ -155,7 +166,8 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                 for e in storage.competition_entries(c.competition_id).await? {
                     let versions = storage.submissions(&c, e.entrant_id).await?;
                     let ranked = versions.iter().filter(|v| v.ranked).count();
-                    let versions_quota = ops::version_quota(&storage, &c, e.entrant_id, now).await?;
+                    let versions_quota =
+                        ops::version_quota(&storage, &c, e.entrant_id, now).await?;
                     let practice = ops::practice_quota(&storage, &c, e.entrant_id, now).await?;
                     println!(
                         "{}: bot {} ({}), {} versions ({ranked} ranked); {}; {}",
@@ -169,15 +181,15 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                 }
                 Ok(())
             }
-            CompetitionCommand::Results { name, csv, json, db } => {
+            CompetitionCommand::Results {
+                name,
+                csv,
+                json,
+                wait,
+                db,
+            } => {
                 let storage = open(&db, false).await?;
-                let c = find(&storage, &name).await?;
-                if c.state.as_deref() != Some("final") {
-                    bail!(
-                        "competition {name} has no results yet (they come after its close, {} UTC, and its final run)",
-                        c.closes_at.map_or("never".into(), |t| Timestamp(t).words())
-                    );
-                }
+                let c = wait_for_results(&storage, &name, wait.unwrap_or(0)).await?;
                 let rows = ops::results(&storage, &c).await?;
                 let differ = ops::recount_differences(&storage, &c).await?;
                 if csv {
@@ -192,17 +204,29 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                         }))?
                     );
                 } else {
-                    println!("{:>4}  {:<24} {:<24} {:>7} {:>10} {:>8}", "rank", "entrant", "bot", "version", "mean", "finished");
+                    println!(
+                        "{:>4}  {:<24} {:<24} {:>7} {:>10} {:>8}",
+                        "rank", "entrant", "bot", "version", "mean", "finished"
+                    );
                     for r in &rows {
                         println!(
                             "{:>4}  {:<24} {:<24} {:>7} {:>10.3} {:>5}/{}",
-                            r.rank, r.entrant_name, r.bot_name, r.version, r.mean_score, r.finished, r.played
+                            r.rank,
+                            r.entrant_name,
+                            r.bot_name,
+                            r.version,
+                            r.mean_score,
+                            r.finished,
+                            r.played
                         );
                     }
                     if differ.is_empty() {
                         println!("recount: every row equals a recount from the match records");
                     } else {
-                        println!("recount: these rows differ from the match records: {}", differ.join(", "));
+                        println!(
+                            "recount: these rows differ from the match records: {}",
+                            differ.join(", ")
+                        );
                     }
                 }
                 anyhow::ensure!(differ.is_empty(), "the results differ from a recount");
@@ -404,8 +428,50 @@ async fn edit(args: EditArgs) -> anyhow::Result<()> {
         practice_per_day: args.practice_per_day,
         final_repeats: args.final_repeats,
         selection,
+        organiser: args.organiser,
         ..Patch::default()
     };
     let c = ops::edit(&storage, c, patch, now).await?;
     print_line(&storage, &c).await
+}
+
+/// Competition `name` once its results are written, waiting up to `wait_secs` for them
+/// and printing the final run's progress (to stderr) each time it moves.
+async fn wait_for_results(
+    storage: &crate::storage::Storage,
+    name: &str,
+    wait_secs: u64,
+) -> anyhow::Result<crate::storage::competitions::CompetitionRow> {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(wait_secs);
+    let mut shown = None;
+    loop {
+        let c = find(storage, name).await?;
+        if c.state.as_deref() == Some("final") {
+            return Ok(c);
+        }
+        let progress = ops::final_progress(storage, &c).await?;
+        if progress.is_some() && progress != shown {
+            if let Some(p) = progress {
+                eprintln!(
+                    "final run of {name}: {} of {} matches played",
+                    p.played, p.total
+                );
+            }
+            shown = progress;
+        }
+        if std::time::Instant::now() >= deadline {
+            match progress {
+                Some(p) => bail!(
+                    "competition {name} has no results yet: its final run has played {} of {} matches (the server writes the results once it has played)",
+                    p.played,
+                    p.total
+                ),
+                None => bail!(
+                    "competition {name} has no results yet (they come after its close, {} UTC, and its final run)",
+                    c.closes_at.map_or("never".into(), |t| Timestamp(t).words())
+                ),
+            }
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(500)).await;
+    }
 }

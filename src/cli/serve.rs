@@ -60,6 +60,11 @@ pub struct ServeArgs {
     /// printed at start.
     #[arg(long, env = "MAZEARENA_ADMIN_TOKEN", hide_env_values = true)]
     admin_token: Option<String>,
+    /// A token that may read `/metrics` (Prometheus' `bearer_token` in its scrape
+    /// config), besides the admin token: the counters and times of matches on hidden
+    /// mazes are the operator's. At least 16 characters.
+    #[arg(long, env = "MAZEARENA_METRICS_TOKEN", hide_env_values = true)]
+    metrics_token: Option<String>,
     /// The most matches that may wait in the queue; more are refused with 429.
     #[arg(long, env = "MAZEARENA_MAX_QUEUE", default_value_t = 10_000)]
     max_queue: i64,
@@ -244,6 +249,14 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     }
 
     let admin_token = admin_token(args.admin_token.as_deref(), &data_dir)?;
+    if let Some(t) = &args.metrics_token {
+        anyhow::ensure!(
+            t.chars().count() >= MIN_ADMIN_TOKEN_CHARS,
+            "the metrics token is too short ({} characters): use at least {MIN_ADMIN_TOKEN_CHARS}, \
+             e.g. MAZEARENA_METRICS_TOKEN=$(openssl rand -hex 32)",
+            t.chars().count()
+        );
+    }
     let offered = match &sandbox {
         Some(crate::runner::Sandbox::Full(f)) => f.runtimes.clone(),
         Some(crate::runner::Sandbox::None) => Vec::new(),
@@ -258,6 +271,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         storage: storage.clone(),
         settings: Arc::new(Settings {
             admin_token_hash: auth::hash_token(&admin_token),
+            metrics_token_hash: args.metrics_token.as_deref().map(auth::hash_token),
             data_dir,
             max_queue: args.max_queue,
             sandbox_level: sandbox.as_ref().map_or(API_ONLY, |s| s.level()),

@@ -212,8 +212,9 @@ pub struct Spec<M> {
     /// Matches of each version on each ranking maze (1 to 20; default 1).
     #[serde(default = "one")]
     pub repeats: u32,
-    /// The final run's matches of each selected version on each private maze (0: no
-    /// final run; up to 50).
+    /// The final run's matches of each selected version on each private maze (up to
+    /// 50; 0: as many as `repeats`). The final run, after the close, is the private
+    /// set's only run.
     #[serde(default)]
     pub final_repeats: u32,
     /// Versions per entrant per 24 hours (default 5); a version that fails to build or

@@ -19,6 +19,12 @@
 //!   mean difference over the mazes and seeds both played (the same bootstrap, paired)
 //!   holds 0. Bots with equal means always share a group. Without common mazes and
 //!   seeds, bots differ when their intervals do not overlap.
+//! - **Hidden matches.** Where a line counts matches on a hidden maze and the caller may
+//!   not see those matches' scores, none of the above is shown ([`withheld`]): with one
+//!   hidden maze and two runs, the interval's ends are the two runs' scores, and with
+//!   few matches any spread, rank range or significance test says something of single
+//!   matches. Such a line shows its mean and its rank; its interval is the mean alone,
+//!   its rank range its rank, and it shares a tie group only with equal means.
 
 pub mod bootstrap;
 
@@ -54,8 +60,12 @@ pub struct Uncertainty {
     /// Whether another bot shares the tie group.
     pub tied: bool,
     /// The fewest runs (seeds) the bot has on any one maze; with 1 the intervals
-    /// measure nothing.
+    /// measure nothing (0 when withheld).
     pub runs_per_maze: i64,
+    /// True when the interval, rank range and tie group are withheld because they would
+    /// tell something of single hidden matches ([`withheld`]): the interval is then the
+    /// mean, the rank range the rank, and the tie group that of equal means only.
+    pub withheld: bool,
 }
 
 /// A bot to rank: its mean score (as the standings show it) and its matches.
@@ -126,6 +136,7 @@ pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
                 tie_group: group,
                 tied: false,
                 runs_per_maze: cells[i].runs_per_maze() as i64,
+                withheld: false,
             },
         ));
     }
@@ -139,6 +150,36 @@ pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
         } else {
             format!("{}-{}", u.rank_best, u.rank_worst)
         };
+    }
+    out
+}
+
+/// The uncertainty shown for lines, given best first as (rank, mean), whose matches
+/// must not be told apart: nothing but what the means say. The interval is the mean,
+/// the rank range the rank, and lines share a tie group only when their means are equal
+/// ([`same_score`]).
+pub fn withheld(lines: &[(i64, f64)]) -> Vec<Uncertainty> {
+    let mut out: Vec<Uncertainty> = Vec::with_capacity(lines.len());
+    let mut group = 0;
+    for (i, &(rank, mean)) in lines.iter().enumerate() {
+        if i == 0 || !same_score(lines[i - 1].1, mean) {
+            group += 1;
+        }
+        out.push(Uncertainty {
+            low: mean,
+            high: mean,
+            rank_best: rank,
+            rank_worst: rank,
+            rank_range: rank.to_string(),
+            tie_group: group,
+            tied: false,
+            runs_per_maze: 0,
+            withheld: true,
+        });
+    }
+    for i in 0..out.len() {
+        let g = out[i].tie_group;
+        out[i].tied = out.iter().filter(|u| u.tie_group == g).count() > 1;
     }
     out
 }
@@ -160,6 +201,53 @@ fn differ(a: &Cells, b: &Cells, ia: (f64, f64), ib: (f64, f64)) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// With one to five hidden matches per bot, no number of a withheld line but its
+    /// mean and rank depends on the matches: the same mean from other matches gives the
+    /// same line, and a single match's score is never among its numbers unless it equals
+    /// the mean.
+    #[test]
+    fn a_withheld_line_tells_nothing_the_mean_does_not() {
+        let sets: [&[f64]; 5] = [
+            &[24.4],
+            &[24.4, 29.0666],
+            &[20.0, 30.0, 1000.0],
+            &[18.5, 18.5, 40.0, 41.0],
+            &[10.0, 20.0, 30.0, 40.0, 1000.0],
+        ];
+        for scores in sets {
+            let samples: Vec<Sample> = scores
+                .iter()
+                .enumerate()
+                .map(|(i, &score)| Sample {
+                    maze: 1,
+                    seed: i as i64,
+                    score,
+                })
+                .collect();
+            let m = mean(&samples);
+            let shown = withheld(&[(1, m)]);
+            let u = &shown[0];
+            assert_eq!((u.low, u.high, u.rank_best, u.rank_worst), (m, m, 1, 1));
+            assert_eq!((u.runs_per_maze, u.tied, u.withheld), (0, false, true));
+            // Another set of matches with the same mean shows the same line.
+            let other = withheld(&[(1, m)]);
+            assert_eq!(&other[0], u);
+            for s in scores.iter().filter(|&&s| !same_score(s, m)) {
+                for n in [u.low, u.high] {
+                    assert!(!same_score(n, *s), "{scores:?}: {n} shows a match");
+                }
+            }
+        }
+        let table = withheld(&[(1, 20.0), (1, 20.0), (3, 25.0)]);
+        assert_eq!(
+            table
+                .iter()
+                .map(|u| (u.tie_group, u.tied))
+                .collect::<Vec<_>>(),
+            vec![(1, true), (1, true), (2, false)]
+        );
+    }
 
     fn runs(maze_scores: &[(i64, &[f64])]) -> Vec<Sample> {
         let mut out = Vec::new();

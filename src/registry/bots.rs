@@ -10,7 +10,7 @@ use crate::botfiles::{BundleLimits, BundleSummary, hash_dir, skip_build_outputs}
 use crate::manifest::BotManifest;
 use crate::runner::botenv;
 use crate::storage::Storage;
-use crate::storage::bots::{BotVersionRow, NewVersion, VersionQuota};
+use crate::storage::bots::{BotVersionRow, NewVersion, VersionQuota, VersionRefusal};
 
 /// Longest bot name.
 pub const MAX_NAME_CHARS: usize = 64;
@@ -152,10 +152,14 @@ pub async fn add_version(
         .await?
     {
         Ok(row) => Ok(row),
-        Err(full) => {
+        Err(VersionRefusal::Quota(full)) => {
             let now = crate::storage::now_ms();
             Err(super::competitions::quota_refusal(storage, full, now).await?)
         }
+        Err(VersionRefusal::Closed { name, closes_at }) => Err(RegistryError::Conflict(format!(
+            "competition {name} closed at {} UTC: no new versions",
+            crate::competition::Timestamp(closes_at).rfc3339()
+        ))),
     }
 }
 

@@ -45,7 +45,11 @@ pub fn phase(c: &CompetitionRow, now: i64) -> Phase {
 /// # Errors
 /// [`RegistryError::Invalid`] saying what is wrong (with the maze and its line for a bad
 /// maze), [`RegistryError::Conflict`] for a name taken, the database.
-pub async fn create(storage: &Storage, spec: Spec<MazeText>) -> Result<CompetitionRow> {
+pub async fn create(
+    storage: &Storage,
+    spec: Spec<MazeText>,
+    organiser_id: Option<i64>,
+) -> Result<CompetitionRow> {
     spec.check().map_err(|e| RegistryError::Invalid(e.0))?;
     let mut ids: MazeSets<i64> = MazeSets {
         practice: Vec::new(),
@@ -83,7 +87,7 @@ pub async fn create(storage: &Storage, spec: Spec<MazeText>) -> Result<Competiti
         ));
     }
     Ok(storage
-        .create_competition(&spec.with_mazes(ids), &seeds)
+        .create_competition(&spec.with_mazes(ids), &seeds, organiser_id)
         .await?)
 }
 
@@ -94,6 +98,15 @@ async fn admit(storage: &Storage, m: &MazeText, hidden: bool) -> Result<i64> {
         .await?
         .map_err(|e| RegistryError::Invalid(format!("invalid maze: {e}")))?;
     if let Some(stored) = storage.get_maze_by_hash(&maze.hash()).await? {
+        // A hidden maze that ranks in another competition stays that competition's:
+        // played here, its results would show there (what a sealed set holds is the
+        // other competition's secret, so the answer names neither).
+        if stored.hidden && storage.maze_ranks_in_a_competition(stored.maze_id).await? {
+            return Err(RegistryError::Conflict(
+                "its layout is a hidden ranking maze of another competition on this server: choose another maze"
+                    .into(),
+            ));
+        }
         return match (stored.hidden, hidden) {
             (true, true) | (false, false) => Ok(stored.maze_id),
             (false, true) => Err(RegistryError::Invalid(
@@ -141,6 +154,9 @@ pub struct Patch {
     pub reveal_private_mazes: Option<bool>,
     /// The match limits (all three, replacing the old).
     pub limits: Option<Limits>,
+    /// Hands the competition to the organiser of this name (the admin only: the API
+    /// checks it).
+    pub organiser: Option<String>,
 }
 
 /// Applies `patch` to competition `c` at `now`. Once closed, nothing but the texts
@@ -275,7 +291,22 @@ pub async fn edit(
         limits.check().map_err(invalid)?;
         c.limits = serde_json::to_string(&limits).unwrap_or_else(|_| "{}".into());
     }
+    let organiser = match &patch.organiser {
+        Some(name) => Some(
+            storage
+                .organiser_by_name(name.trim())
+                .await?
+                .ok_or_else(|| RegistryError::Invalid(format!("no organiser {name:?}")))?,
+        ),
+        None => None,
+    };
     storage.save_competition_settings(&c).await?;
+    if let Some(id) = organiser {
+        storage
+            .set_competition_organiser(c.competition_id, Some(id))
+            .await?;
+        c.organiser_id = Some(id);
+    }
     Ok(c)
 }
 
@@ -404,7 +435,12 @@ pub async fn check_practice(
     now: i64,
 ) -> Result<std::result::Result<Vec<PracticeQuota>, (String, Quota)>> {
     let mut quotas = Vec::new();
-    for c in storage.competitions_of_bot(bot_id).await? {
+    // Counted per entrant, all its bots together: a bot not entered plays the practice
+    // mazes of its entrant's competitions on the same quota.
+    let Some(entrant_id) = storage.entrant_of_bot(bot_id).await? else {
+        return Ok(Ok(quotas));
+    };
+    for c in storage.competitions_of_entrant(entrant_id).await? {
         let practice = storage
             .competition_mazes(c.competition_id)
             .await?
@@ -413,21 +449,19 @@ pub async fn check_practice(
         if !practice {
             continue;
         }
-        if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {
-            let quota = practice_quota(storage, &c, entrant_id, now).await?;
-            if !quota.allows_one_more() {
-                return Ok(Err((
-                    format!("competition {}: {}", c.name, quota.message),
-                    quota,
-                )));
-            }
-            quotas.push(PracticeQuota {
-                competition_id: c.competition_id,
-                entrant_id,
-                limit: c.practice_per_day,
-                since: now - DAY_MS,
-            });
+        let quota = practice_quota(storage, &c, entrant_id, now).await?;
+        if !quota.allows_one_more() {
+            return Ok(Err((
+                format!("competition {}: {}", c.name, quota.message),
+                quota,
+            )));
         }
+        quotas.push(PracticeQuota {
+            competition_id: c.competition_id,
+            entrant_id,
+            limit: c.practice_per_day,
+            since: now - DAY_MS,
+        });
     }
     Ok(Ok(quotas))
 }
@@ -491,18 +525,52 @@ pub struct BoardLine {
 pub struct Board {
     /// Which board.
     pub board: BoardKind,
-    /// True when the caller may not see it yet (the private board before the close):
-    /// `standings` is then empty.
+    /// True when the caller may not see it yet (the private board until the results;
+    /// for the competition's organisers, until the final run has played): `standings`
+    /// is then empty.
     pub sealed: bool,
     /// Since when the public board shows only versions uploaded before the freeze.
     pub frozen_at: Option<Timestamp>,
+    /// On the private board: how far the final run has played (none before the close's
+    /// selection has queued it).
+    pub final_run: Option<RunProgress>,
     /// Best first.
     pub standings: Vec<BoardLine>,
 }
 
-/// Board `kind` of competition `c` at `now`, as an organiser (`organiser`: everything,
-/// versions still playing included) or anyone else sees it: the private board sealed
-/// until the close; on either board only versions whose matches there have all been
+/// How far a competition's final run (the private set's only run) has played.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, utoipa::ToSchema)]
+pub struct RunProgress {
+    /// Matches played.
+    pub played: i64,
+    /// Matches in the final run.
+    pub total: i64,
+}
+
+impl RunProgress {
+    /// Whether every match has been played.
+    pub fn done(&self) -> bool {
+        self.played >= self.total
+    }
+}
+
+/// The final run's progress, once the final selection has queued it.
+///
+/// # Errors
+/// The database.
+pub async fn final_progress(storage: &Storage, c: &CompetitionRow) -> Result<Option<RunProgress>> {
+    let Some(t) = c.final_tournament_id else {
+        return Ok(None);
+    };
+    let (played, total) = storage.tournament_progress(t).await?;
+    Ok(Some(RunProgress { played, total }))
+}
+
+/// Board `kind` of competition `c` at `now`, as an organiser of it (`organiser`:
+/// everything, versions still playing included) or anyone else sees it. The private
+/// board is the final run's: before the close no bot has played a private maze, so
+/// there is nothing to show; organisers see it once the final run has played, everyone
+/// with the results. On either board only versions whose matches there have all been
 /// played (a mean that moves with each match would show each match's result); while the
 /// public board is frozen, only versions uploaded before the freeze.
 ///
@@ -516,14 +584,20 @@ pub async fn board(
     now: i64,
 ) -> Result<Board> {
     let phase = phase(c, now);
+    let progress = match kind {
+        BoardKind::Public => None,
+        BoardKind::Private => final_progress(storage, c).await?,
+    };
     let tournament = match kind {
         BoardKind::Public => c.public_tournament_id,
-        BoardKind::Private => c.private_tournament_id,
+        BoardKind::Private => deciding_tournament(c),
     };
     let frozen_at = timeline(c)
         .and_then(|t| t.frozen_from())
         .filter(|&f| kind == BoardKind::Public && now >= f);
-    let sealed = kind == BoardKind::Private && phase != Phase::Closed && !organiser;
+    let sealed = kind == BoardKind::Private
+        && c.state.as_deref() != Some("final")
+        && !(organiser && progress.is_some_and(|p| p.done()));
     let rows = match tournament {
         Some(t) if !sealed => storage.competition_board(t, false).await?,
         _ => Vec::new(),
@@ -546,11 +620,25 @@ pub async fn board(
                 l.uncertainty = u;
             },
         );
+        // Over hidden mazes, nothing but the means for anyone but the organisers: an
+        // interval over few hidden matches would show single matches' scores.
+        let revealed = kind == BoardKind::Private
+            && c.reveal_private_mazes
+            && c.state.as_deref() == Some("final");
+        if !organiser && !revealed {
+            rankings::withhold_lines(
+                &mut standings,
+                |l| l.rank,
+                |l| l.mean_score,
+                |l, u| l.uncertainty = u,
+            );
+        }
     }
     Ok(Board {
         board: kind,
         sealed,
         frozen_at: frozen_at.map(Timestamp),
+        final_run: progress,
         standings,
     })
 }
@@ -583,7 +671,8 @@ fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
 }
 
 /// The stored results of `c`, best first, each with how sure its rank is (from the
-/// deciding set's matches, which no longer change; the stored ranks are kept).
+/// deciding set's matches, which no longer change; the stored ranks are kept; withheld
+/// while the private mazes stay hidden, [`crate::ranking::withheld`]).
 ///
 /// # Errors
 /// The database.
@@ -604,6 +693,16 @@ pub async fn results(storage: &Storage, c: &CompetitionRow) -> Result<Vec<Result
                 .cmp(&b.rank)
                 .then(a.entrant_name.cmp(&b.entrant_name))
         });
+        // The private mazes stay hidden: their matches' scores are never shown, so
+        // neither is anything that would tell them (the means and ranks only).
+        if !c.reveal_private_mazes {
+            rankings::withhold_lines(
+                &mut rows,
+                |r| r.rank,
+                |r| r.mean_score,
+                |r, u| r.uncertainty = u,
+            );
+        }
     }
     Ok(rows)
 }
@@ -620,10 +719,10 @@ pub struct TickReport {
 }
 
 /// The clock's work at `now`: queues every new ready version of an entered bot on its
-/// competitions' ranking sets; for each closed competition, unseals its private board,
-/// and once its last matches and builds are done makes the final selection (and queues
-/// the final run), and once that is played writes the results. Safe to run on several
-/// servers at once: each step is done once.
+/// competitions' public ranking sets; for each closed competition, once its last public
+/// matches and builds are done, makes the final selection and queues the final run (the
+/// private set's only run), and once that is played writes the results. Safe to run on
+/// several servers at once: each step is done once.
 ///
 /// # Errors
 /// The database.
@@ -649,12 +748,7 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
             continue;
         };
         if storage
-            .rank_version(
-                c,
-                version_id,
-                &in_set(mazes, "public"),
-                &in_set(mazes, "private"),
-            )
+            .rank_version(c, version_id, &in_set(mazes, "public"))
             .await?
         {
             report.ranked += 1;
@@ -782,17 +876,15 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
         .collect();
     let matches = storage.tournament_matches(t).await?;
     let limits = c.limit_set();
-    let mut replay = String::from(
-        "mazearena run --maze MAZE_FILE --bot COMMAND --bot-dir FOLDER_OF_THE_BUNDLE --seed SEED",
-    );
+    let mut limit_args = String::new();
     if let Some(ms) = limits.move_timeout_ms {
-        replay.push_str(&format!(" --move-timeout-ms {ms}"));
+        limit_args.push_str(&format!(" --move-timeout-ms {ms}"));
     }
     if let Some(ms) = limits.startup_timeout_ms {
-        replay.push_str(&format!(" --startup-timeout-ms {ms}"));
+        limit_args.push_str(&format!(" --startup-timeout-ms {ms}"));
     }
     if let Some(mb) = limits.memory_limit_mb {
-        replay.push_str(&format!(" --memory-limit-mb {mb}"));
+        limit_args.push_str(&format!(" --memory-limit-mb {mb}"));
     }
     let mut rows = Vec::new();
     for (rank, s) in selection::rank_entrants(&scores) {
@@ -823,12 +915,24 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
                 })
             })
             .collect();
+        let env = version.as_ref().map(|v| v.env_pairs()).unwrap_or_default();
+        let runtime = version.as_ref().and_then(|v| v.runtime.clone());
+        let build_command = version.as_ref().and_then(|v| v.build_command.clone());
+        let replay = replay_command(
+            &env,
+            runtime.as_deref(),
+            build_command.as_deref(),
+            &limit_args,
+        );
         let manifest = serde_json::json!({
             "competition": c.name,
             "bot_version_id": s.bot_version_id,
             "bundle_sha256": version.as_ref().map(|v| v.files_sha256.clone()),
             "built_sha256": version.as_ref().and_then(|v| v.built_sha256.clone()),
             "command": version.as_ref().map(|v| v.command.clone()),
+            "runtime": runtime,
+            "build_command": build_command,
+            "env": declared_env(&env),
             "referee": crate::runner::ENGINE_VERSION,
             "tournament_id": t,
             "mazes": mazes,
@@ -871,6 +975,45 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
         }
     }
     Ok(storage.write_results(c, &rows, &reveal).await?)
+}
+
+/// The declared environment of a version as a manifest holds it: each variable's name
+/// and the SHA-256 (hex) of `NAME=VALUE`, so that the owner, who knows the values, can
+/// check them, and nobody else learns them.
+fn declared_env(env: &[(String, String)]) -> Vec<serde_json::Value> {
+    env.iter()
+        .map(|(k, v)| {
+            serde_json::json!({
+                "name": k,
+                "sha256": super::tokens::hash_token(&format!("{k}={v}")),
+            })
+        })
+        .collect()
+}
+
+/// The command line that plays one of a version's matches again with `mazearena run`:
+/// its declared variables (values from the owner), its runtime, the build run first.
+fn replay_command(
+    env: &[(String, String)],
+    runtime: Option<&str>,
+    build: Option<&str>,
+    limit_args: &str,
+) -> String {
+    let mut out = String::new();
+    if let Some(b) = build {
+        out.push_str(&format!("(cd FOLDER_OF_THE_BUNDLE && {b}) && "));
+    }
+    out.push_str(
+        "mazearena run --maze MAZE_FILE --bot COMMAND --bot-dir FOLDER_OF_THE_BUNDLE --seed SEED",
+    );
+    out.push_str(limit_args);
+    if runtime.is_some() {
+        out.push_str(" --runtime DIR_OF_THE_RUNTIME");
+    }
+    for (k, _) in env {
+        out.push_str(&format!(" --bot-env {k}=VALUE"));
+    }
+    out
 }
 
 /// Checks stored results against a recount from the match records now: the rows whose
@@ -1038,14 +1181,14 @@ mod tests {
     async fn each_step_of_the_clock_happens_once_and_the_results_equal_a_recount() {
         for (db, _guard) in backends().await {
             let now = now_ms();
-            let c = create(&db, spec(now)).await.unwrap();
+            let c = create(&db, spec(now), None).await.unwrap();
             assert!(sealed(&db, c.private_tournament_id).await);
             assert!(!sealed(&db, c.public_tournament_id).await);
             // A ranking maze must not be public, a practice maze not hidden.
             let mut bad = spec(now);
             bad.name = "d".into();
             bad.mazes.public = vec![maze(7001)];
-            let err = create(&db, bad).await.unwrap_err();
+            let err = create(&db, bad, None).await.unwrap_err();
             assert!(err.to_string().contains("must be hidden"), "{err}");
             let e = db.create_entrant("e", "[]", "k").await.unwrap();
             let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
@@ -1053,7 +1196,8 @@ mod tests {
             db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
                 .await
                 .unwrap();
-            // Ranked once: 1 public x 2 + 2 private x 2 matches, every seed secret.
+            // Ranked once: 1 public maze x 2 repeats, every seed secret; no private match
+            // before the close.
             assert_eq!(tick(&db, now).await.unwrap().ranked, 1);
             assert_eq!(tick(&db, now).await.unwrap(), TickReport::default());
             let seeds = c.seed_list();
@@ -1066,15 +1210,21 @@ mod tests {
                 queued.iter().map(|m| m.seed).collect::<Vec<_>>(),
                 seeds[..2].to_vec()
             );
+            let private_matches = db
+                .tournament_matches(c.private_tournament_id.unwrap())
+                .await
+                .unwrap();
+            assert!(private_matches.is_empty(), "{private_matches:?}");
             play_all(&db, 20.0).await;
             let public = board(&db, &c, BoardKind::Public, false, now).await.unwrap();
             assert_eq!(public.standings.len(), 1);
-            let private = board(&db, &c, BoardKind::Private, false, now)
-                .await
-                .unwrap();
-            assert!(private.sealed && private.standings.is_empty());
-            let private = board(&db, &c, BoardKind::Private, true, now).await.unwrap();
-            assert_eq!(private.standings[0].played, 4);
+            for organiser in [false, true] {
+                let private = board(&db, &c, BoardKind::Private, organiser, now)
+                    .await
+                    .unwrap();
+                assert!(private.sealed && private.standings.is_empty());
+                assert_eq!(private.final_run, None);
+            }
             // Closed: the private set unsealed, the selection and final run made once.
             let c = edit(
                 &db,
@@ -1093,12 +1243,41 @@ mod tests {
             let c = db.get_competition("c").await.unwrap().unwrap();
             assert!(!db.start_final(&c, &[v.bot_version_id], &[]).await.unwrap());
             assert!(sealed(&db, c.final_tournament_id).await);
+            // The final run: 2 private mazes x 1 repeat, with seeds of its own.
+            let final_matches = db
+                .tournament_matches(c.final_tournament_id.unwrap())
+                .await
+                .unwrap();
+            assert_eq!(final_matches.len(), 2);
+            assert!(final_matches.iter().all(|m| m.seed == seeds[2]));
+            assert!(!seeds[..2].contains(&seeds[2]));
             assert_eq!(
                 tick(&db, later).await.unwrap(),
                 TickReport::default(),
                 "the final run waits"
             );
+            let private = board(&db, &c, BoardKind::Private, true, later)
+                .await
+                .unwrap();
+            assert!(private.sealed);
+            assert_eq!(
+                private.final_run,
+                Some(RunProgress {
+                    played: 0,
+                    total: 2
+                })
+            );
             play_all(&db, 30.0).await;
+            // Played: its organisers see it, nobody else until the results.
+            let private = board(&db, &c, BoardKind::Private, true, later)
+                .await
+                .unwrap();
+            assert!(!private.sealed);
+            assert_eq!(private.standings[0].played, 2);
+            let private = board(&db, &c, BoardKind::Private, false, later)
+                .await
+                .unwrap();
+            assert!(private.sealed && private.standings.is_empty());
             assert_eq!(tick(&db, later).await.unwrap().finalized, 1);
             assert_eq!(tick(&db, later).await.unwrap(), TickReport::default());
             let c = db.get_competition("c").await.unwrap().unwrap();

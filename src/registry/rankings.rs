@@ -54,6 +54,21 @@ pub fn rank_lines<T>(
     }
 }
 
+/// Replaces the uncertainty of `lines` (ranked, best first) by what their means alone
+/// say ([`ranking::withheld`]): for lines over hidden matches whose scores the caller
+/// may not see.
+pub fn withhold_lines<T>(
+    lines: &mut [T],
+    rank: impl Fn(&T) -> i64,
+    mean: impl Fn(&T) -> f64,
+    mut set: impl FnMut(&mut T, Uncertainty),
+) {
+    let shown: Vec<(i64, f64)> = lines.iter().map(|l| (rank(l), mean(l))).collect();
+    for (line, u) in lines.iter_mut().zip(ranking::withheld(&shown)) {
+        set(line, u);
+    }
+}
+
 /// A standing's own numbers, best first: (bot, version, played, finished, mean's bits).
 type Key = (Scope, Vec<(i64, i64, i64, i64, u64)>);
 

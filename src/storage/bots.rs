@@ -192,10 +192,15 @@ impl Storage {
     }
 
     /// Adds a version to bot `bot_id` as [`Storage::add_bot_version`] does, unless it
-    /// would go over one of `quotas`: then nothing is written and the quota is
-    /// returned. Each quota's entrant row is taken for the transaction first, so two
-    /// uploads of one entrant at once are counted one after the other: the second
-    /// waits for the first to commit, then counts its version.
+    /// would go over one of `quotas`, or a competition the bot is entered in has closed
+    /// by the time it is stored: then nothing is written and the refusal is returned.
+    /// Each quota's entrant row is taken for the transaction first, so two uploads of
+    /// one entrant at once are counted one after the other: the second waits for the
+    /// first to commit, then counts its version. The bot's competitions' rows are taken
+    /// too, and their close compared with the clock after that, in the transaction that
+    /// stores the version: the close's selection (which updates those rows) comes after
+    /// a version stored before the close, and a version that loses the race is not
+    /// stored at all.
     ///
     /// # Errors
     /// Database failures.
@@ -204,7 +209,7 @@ impl Storage {
         bot_id: i64,
         new: &NewVersion<'_>,
         quotas: &[VersionQuota],
-    ) -> Result<std::result::Result<BotVersionRow, VersionQuota>> {
+    ) -> Result<std::result::Result<BotVersionRow, VersionRefusal>> {
         let mut quotas = quotas.to_vec();
         // One order for the locks, so two uploads never wait for each other.
         quotas.sort_by_key(|q| (q.entrant_id, q.competition_id));
@@ -223,10 +228,30 @@ impl Storage {
             .await?;
             if counted >= q.limit {
                 tx.rollback().await?;
-                return Ok(Err(*q));
+                return Ok(Err(VersionRefusal::Quota(*q)));
             }
         }
         let row = insert_version(&mut tx, bot_id, new).await?;
+        sqlx::query(
+            "update competition set closes_at = closes_at where kind = 'competition' and competition_id in
+                 (select competition_id from competition_entry where bot_id = $1)",
+        )
+        .bind(bot_id)
+        .execute(&mut *tx)
+        .await?;
+        let closed: Option<(String, i64)> = sqlx::query_as(
+            "select name, closes_at from competition where kind = 'competition' and closes_at <= $2
+                 and competition_id in (select competition_id from competition_entry where bot_id = $1)
+             order by closes_at limit 1",
+        )
+        .bind(bot_id)
+        .bind(now_ms().max(row.created_at))
+        .fetch_optional(&mut *tx)
+        .await?;
+        if let Some((name, closes_at)) = closed {
+            tx.rollback().await?;
+            return Ok(Err(VersionRefusal::Closed { name, closes_at }));
+        }
         resume_in(&mut tx, bot_id).await?;
         tx.commit().await?;
         Ok(Ok(row))
@@ -403,6 +428,21 @@ pub struct VersionQuota {
     pub limit: i64,
     /// Versions uploaded after this time (unix ms) count.
     pub since: i64,
+}
+
+/// Why [`Storage::add_bot_version_within`] stored nothing.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum VersionRefusal {
+    /// The quota is used up.
+    Quota(VersionQuota),
+    /// A competition the bot is entered in closed (its name and close, unix ms) before
+    /// the version could be stored.
+    Closed {
+        /// The competition's name.
+        name: String,
+        /// Its close (unix ms).
+        closes_at: i64,
+    },
 }
 
 async fn resume_in(tx: &mut sqlx::AnyConnection, bot_id: i64) -> Result<bool> {

@@ -2,8 +2,10 @@
 //! the ranking sets, the boards, the quotas' counts and the final results.
 //!
 //! A competition's ranking matches live in tournaments of its own: one for the public
-//! set, one for the private set (sealed until the close), one for the final run (sealed
-//! until the results), so that the running sums of `standing` give its boards.
+//! set, one for the final run (the private set's only matches, all played after the
+//! close and sealed until the results), so that the running sums of `standing` give its
+//! boards. The private set's own tournament is kept for competitions of earlier
+//! versions, which played it before the close; none gets matches now.
 
 use sqlx::FromRow;
 
@@ -28,7 +30,7 @@ pub struct CompetitionRow {
     pub kind: String,
     /// Matches per version per ranking maze.
     pub repeats: i64,
-    /// The final run's matches per selected version per private maze (0: none).
+    /// The final run's matches per selected version per private maze (0: `repeats`).
     pub final_repeats: i64,
     /// Match limits (JSON, [`crate::competition::Limits`]).
     pub limits: String,
@@ -63,6 +65,8 @@ pub struct CompetitionRow {
     pub finalized_at: Option<i64>,
     /// Created at (unix ms).
     pub created_at: i64,
+    /// The organiser it belongs to (`None`: the admin's).
+    pub organiser_id: Option<i64>,
 }
 
 impl CompetitionRow {
@@ -74,6 +78,16 @@ impl CompetitionRow {
     /// The match limits.
     pub fn limit_set(&self) -> crate::competition::Limits {
         serde_json::from_str(&self.limits).unwrap_or_default()
+    }
+
+    /// The final run's matches per selected version per private maze: `final_repeats`,
+    /// or `repeats` where that is 0.
+    pub fn final_run_repeats(&self) -> i64 {
+        if self.final_repeats > 0 {
+            self.final_repeats
+        } else {
+            self.repeats
+        }
     }
 
     /// Its tournaments (public, private, final) that exist.
@@ -92,7 +106,7 @@ impl CompetitionRow {
 const COMPETITION_COLUMNS: &str = "competition_id, name, title, description, rules, kind, repeats,
     final_repeats, limits, opens_at, closes_at, freeze_ms, versions_per_day, practice_per_day,
     selection, max_selected, reveal_private_mazes, seeds, state, public_tournament_id,
-    private_tournament_id, final_tournament_id, finalized_at, created_at";
+    private_tournament_id, final_tournament_id, finalized_at, created_at, organiser_id";
 
 /// A maze of a competition.
 #[derive(Debug, Clone, PartialEq, FromRow)]
@@ -246,6 +260,7 @@ impl Storage {
         &self,
         spec: &Spec<i64>,
         seeds: &[i64],
+        organiser_id: Option<i64>,
     ) -> Result<CompetitionRow> {
         let _turn = self.write_turn().await;
         let now = now_ms();
@@ -271,9 +286,9 @@ impl Storage {
             "insert into competition (name, title, description, rules, kind, repeats, final_repeats,
                  limits, opens_at, closes_at, freeze_ms, versions_per_day, practice_per_day,
                  selection, max_selected, reveal_private_mazes, seeds, public_tournament_id,
-                 private_tournament_id, created_at)
+                 private_tournament_id, created_at, organiser_id)
              values ($1, $2, $3, $4, 'competition', $5, $6, $7, $8, $9, $10, $11, $12, $13, $14,
-                 $15, $16, $17, $18, $19)
+                 $15, $16, $17, $18, $19, $20)
              returning competition_id",
         )
         .bind(&spec.name)
@@ -295,6 +310,7 @@ impl Storage {
         .bind(tournaments[0])
         .bind(tournaments[1])
         .bind(now)
+        .bind(organiser_id)
         .fetch_one(&mut *tx)
         .await
         .map_err(|e| {
@@ -464,6 +480,20 @@ impl Storage {
         Ok(n > 0)
     }
 
+    /// Whether maze `maze_id` is in the public or private set of a competition.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn maze_ranks_in_a_competition(&self, maze_id: i64) -> Result<bool> {
+        let n: i64 = sqlx::query_scalar(
+            "select count(*) from competition_maze where maze_id = $1 and maze_set <> 'practice'",
+        )
+        .bind(maze_id)
+        .fetch_one(self.pool())
+        .await?;
+        Ok(n > 0)
+    }
+
     /// Registers an organiser whose key has SHA-256 `key_hash`.
     ///
     /// # Errors
@@ -485,6 +515,65 @@ impl Storage {
                 e.into()
             }
         })
+    }
+
+    /// The organiser whose key has SHA-256 `key_hash`.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn organiser_by_key(&self, key_hash: &str) -> Result<Option<i64>> {
+        Ok(
+            sqlx::query_scalar("select organiser_id from organiser where key_hash = $1")
+                .bind(key_hash)
+                .fetch_optional(self.pool())
+                .await?,
+        )
+    }
+
+    /// The organiser named `name`.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn organiser_by_name(&self, name: &str) -> Result<Option<i64>> {
+        Ok(
+            sqlx::query_scalar("select organiser_id from organiser where name = $1")
+                .bind(name)
+                .fetch_optional(self.pool())
+                .await?,
+        )
+    }
+
+    /// Hands competition `competition_id` to organiser `organiser_id` (`None`: the
+    /// admin's).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn set_competition_organiser(
+        &self,
+        competition_id: i64,
+        organiser_id: Option<i64>,
+    ) -> Result<()> {
+        let _turn = self.write_turn().await;
+        sqlx::query("update competition set organiser_id = $2 where competition_id = $1")
+            .bind(competition_id)
+            .bind(organiser_id)
+            .execute(self.pool())
+            .await?;
+        Ok(())
+    }
+
+    /// The competitions entrant `entrant_id` has a bot entered in.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn competitions_of_entrant(&self, entrant_id: i64) -> Result<Vec<CompetitionRow>> {
+        Ok(sqlx::query_as(&format!(
+            "select {COMPETITION_COLUMNS} from competition where competition_id in
+                 (select competition_id from competition_entry where entrant_id = $1)"
+        ))
+        .bind(entrant_id)
+        .fetch_all(self.pool())
+        .await?)
     }
 
     /// Whether `key_hash` is an organiser's key's hash.
@@ -629,9 +718,10 @@ impl Storage {
         .await?)
     }
 
-    /// Queues version `bot_version_id` on a competition's ranking sets (`public` and
-    /// `private` maze ids), every repeat with its secret seed, public first. Returns
-    /// false if it was queued already.
+    /// Queues version `bot_version_id` on a competition's public ranking set (`public`
+    /// maze ids), every repeat with its secret seed. The private set is never played
+    /// before the close: its only matches are the final run's ([`Storage::start_final`]).
+    /// Returns false if it was queued already.
     ///
     /// # Errors
     /// Database failures.
@@ -640,7 +730,6 @@ impl Storage {
         c: &CompetitionRow,
         bot_version_id: i64,
         public: &[i64],
-        private: &[i64],
     ) -> Result<bool> {
         let _turn = self.write_turn().await;
         let now = now_ms();
@@ -658,22 +747,14 @@ impl Storage {
         if added == 0 {
             return Ok(false);
         }
-        let seeds = c.seed_list();
-        let sets = [
-            (c.public_tournament_id, public),
-            (c.private_tournament_id, private),
-        ];
-        for (tournament, mazes) in sets {
-            let Some(tournament) = tournament else {
-                continue;
-            };
+        if let Some(tournament) = c.public_tournament_id {
             queue_matches(
                 &mut tx,
                 tournament,
                 bot_version_id,
-                mazes,
+                public,
                 0..c.repeats,
-                &seeds,
+                &c.seed_list(),
                 now,
             )
             .await?;
@@ -893,8 +974,9 @@ impl Storage {
     }
 
     /// Records the final selection and queues the final run of the `selected` versions
-    /// on the private mazes (`final_repeats` each, seeds after the ranking's), in a
-    /// sealed tournament. Returns false if another server did it first.
+    /// on the private mazes ([`CompetitionRow::final_run_repeats`] each, with seeds of
+    /// their own: the repeat indexes after the public set's), in a sealed tournament:
+    /// the private set's only matches. Returns false if another server did it first.
     ///
     /// # Errors
     /// Database failures.
@@ -926,13 +1008,14 @@ impl Storage {
             .execute(&mut *tx)
             .await?;
         }
-        if c.final_repeats > 0 && !selected.is_empty() {
+        let repeats = c.final_run_repeats();
+        if !selected.is_empty() && !private.is_empty() {
             let t: i64 = sqlx::query_scalar(
                 "insert into tournament (name, repeats, created_at, sealed, limits, competition_id)
                  values ($1, $2, $3, 1, $4, $5) returning tournament_id",
             )
             .bind(format!("{}: final run", c.name))
-            .bind(c.final_repeats)
+            .bind(repeats)
             .bind(now)
             .bind(&c.limits)
             .bind(c.competition_id)
@@ -945,7 +1028,7 @@ impl Storage {
                     t,
                     *id,
                     private,
-                    c.repeats..c.repeats + c.final_repeats,
+                    c.repeats..c.repeats + repeats,
                     &seeds,
                     now,
                 )
@@ -1037,6 +1120,21 @@ impl Storage {
         )
         .bind(competition_id)
         .fetch_all(self.pool())
+        .await?)
+    }
+
+    /// How far tournament `tournament_id` has played: (matches played, matches in it).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn tournament_progress(&self, tournament_id: i64) -> Result<(i64, i64)> {
+        Ok(sqlx::query_as(
+            "select cast(coalesce(sum(case when status in ('queued', 'running') then 0 else 1 end), 0) as bigint),
+                 cast(count(*) as bigint)
+             from match where tournament_id = $1",
+        )
+        .bind(tournament_id)
+        .fetch_one(self.pool())
         .await?)
     }
 

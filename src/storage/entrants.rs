@@ -91,18 +91,29 @@ impl Storage {
         .await?)
     }
 
-    /// Replaces entrant `entrant_id`'s key (the old one stops working at once).
+    /// Replaces entrant `entrant_id`'s key (the old one stops working at once) and
+    /// revokes the owner token of every bot of the entrant (a token given when a bot was
+    /// registered, maybe with the old key): from then on the new key alone acts for them.
     ///
     /// # Errors
     /// Database failures.
     pub async fn rotate_entrant_key(&self, entrant_id: i64, key_hash: &str) -> Result<()> {
         let _turn = self.write_turn().await;
+        let mut tx = self.begin_write().await?;
         sqlx::query("update entrant set key_hash = $1, key_rotated_at = $2 where entrant_id = $3")
             .bind(key_hash)
             .bind(now_ms())
             .bind(entrant_id)
-            .execute(self.pool())
+            .execute(&mut *tx)
             .await?;
+        // No SHA-256 in hex is ever this: the token matches nothing.
+        sqlx::query(
+            "update bot set owner_token_hash = 'revoked:' || cast(bot_id as text) where entrant_id = $1",
+        )
+        .bind(entrant_id)
+        .execute(&mut *tx)
+        .await?;
+        tx.commit().await?;
         Ok(())
     }
 
@@ -200,6 +211,8 @@ mod tests {
             db.rotate_entrant_key(e.entrant_id, "k3").await.unwrap();
             assert!(!db.is_bot_owner(bot, "k1").await.unwrap());
             assert!(db.is_bot_owner(bot, "k3").await.unwrap());
+            // The bot's own owner token is revoked with the old key.
+            assert!(!db.is_bot_owner(bot, "own").await.unwrap());
             assert_eq!(
                 db.bots_of_entrant(e.entrant_id).await.unwrap(),
                 vec![(bot, "b".into())]

@@ -637,6 +637,7 @@ async fn hostile_bots_are_recorded_and_the_server_keeps_serving() {
     let metrics = server
         .client()
         .get(format!("{}/metrics", server.base))
+        .bearer_auth(ADMIN)
         .send()
         .await
         .unwrap()
@@ -1372,6 +1373,7 @@ async fn a_match_running_each_time_the_server_dies_is_aborted_and_its_bot_paused
     let metrics = server
         .client()
         .get(format!("{}/metrics", server.base))
+        .bearer_auth(ADMIN)
         .send()
         .await
         .unwrap()
@@ -1636,7 +1638,30 @@ async fn entrants_register_by_invite_and_their_key_acts_for_their_bots_until_rot
     assert_eq!(s, 200, "{fresh}");
     let fresh = fresh["key"].as_str().unwrap().to_string();
     assert_eq!(queue_with(key).await.0, 403);
-    assert_eq!(queue_with(fresh).await.0, 202);
+    assert_eq!(queue_with(fresh.clone()).await.0, 202);
+    // The bot's owner token, given when it was registered with the old key, is revoked
+    // with it: it queues no match and uploads no version.
+    let owner = b["owner_token"].as_str().unwrap().to_string();
+    assert_eq!(queue_with(owner.clone()).await.0, 403);
+    let upload = json!({"command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (s, v, _) = server
+        .call(
+            Method::POST,
+            &format!("/api/bots/{bot}/versions"),
+            Some(upload.clone()),
+            Some(&owner),
+        )
+        .await;
+    assert_error(s, &v, 403);
+    let (s, v, _) = server
+        .call(
+            Method::POST,
+            &format!("/api/bots/{bot}/versions"),
+            Some(upload),
+            Some(&fresh),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
     // Closed: nobody registers but through the admin.
     put(json!({"mode": "closed"})).await;
     let (s, v) = server
@@ -1853,4 +1878,60 @@ fn a_servers_log_written_to_a_file_is_plain_text() {
     let text = std::fs::read_to_string(&log).unwrap();
     assert!(text.contains("shutting down"), "{text}");
     assert!(!text.contains('\u{1b}'), "colour codes in a file: {text:?}");
+}
+
+/// `/metrics` and `/healthz`'s counts move with matches on hidden mazes (a bot that
+/// times its matches, a status counted): they are the operator's. `/metrics` answers the
+/// metrics token and the admin token; `/healthz` says ok to anyone and counts for the
+/// admin only.
+#[tokio::test]
+async fn metrics_and_healthz_counts_are_the_operators() {
+    let dir = tempfile::tempdir().unwrap();
+    let token = "metrics-scrape-token-0123456789";
+    let server = TestServer::start(dir.path(), &["--jobs", "0", "--metrics-token", token]);
+    let (_, owner) = crate::support::register(
+        &server,
+        "counted",
+        "python3 simple_bot.py",
+        crate::support::simple_bot_files(),
+    )
+    .await;
+    let metrics = |t: Option<&'static str>| {
+        let server = &server;
+        async move {
+            let mut req = server.client().get(format!("{}/metrics", server.base));
+            if let Some(t) = t {
+                req = req.bearer_auth(t);
+            }
+            let resp = req.send().await.unwrap();
+            (resp.status().as_u16(), resp.text().await.unwrap())
+        }
+    };
+    let (s, body) = metrics(None).await;
+    assert_eq!(s, 401, "{body}");
+    assert!(!body.contains("mazearena_"), "{body}");
+    let owner: &'static str = Box::leak(owner.into_boxed_str());
+    let (s, body) = metrics(Some(owner)).await;
+    assert_eq!(s, 403, "{body}");
+    assert!(!body.contains("mazearena_"), "{body}");
+    for t in [token, ADMIN] {
+        let (s, body) = metrics(Some(t)).await;
+        assert_eq!(s, 200, "{body}");
+        assert!(body.contains("mazearena_queue_depth"), "{body}");
+    }
+    for t in [None, Some(owner)] {
+        let (s, health) = server.get("/healthz", t).await;
+        assert_eq!(
+            (s, health["status"].as_str()),
+            (200, Some("ok")),
+            "{health}"
+        );
+        assert!(
+            health.get("queued").is_none() && health.get("workers").is_none(),
+            "{health}"
+        );
+    }
+    let (_, health) = server.get("/healthz", Some(ADMIN)).await;
+    assert_eq!(health["queued"], 0, "{health}");
+    assert!(health["workers"].is_array(), "{health}");
 }

@@ -233,15 +233,52 @@ async fn play_a_competition(server: &TestServer) {
             .all(|r| r["played"] == 4),
         "{board}"
     );
-    // Each line states how sure it is: an interval around its mean, a rank range.
+    // Each line states how sure it is: an interval around its mean, a rank range; over
+    // the hidden public set, for anyone but its organiser, nothing the means do not say
+    // (an interval over 2 runs on a maze would show each run's score).
     for r in board["standings"].as_array().unwrap() {
         assert_interval(r, "mean_score");
+        let u = &r["uncertainty"];
+        assert_eq!(u["withheld"], true, "{r}");
+        assert_eq!(
+            (&u["low"], &u["high"]),
+            (&r["mean_score"], &r["mean_score"]),
+            "{r}"
+        );
+    }
+    let (_, org_board) = server
+        .get("/api/competitions/class-2027/leaderboard", Some(&organiser))
+        .await;
+    for r in org_board["standings"].as_array().unwrap() {
+        assert_eq!(r["uncertainty"]["withheld"], false, "{r}");
     }
 
-    // Sealed before the close: the private board, tournament and matches, for an entrant
-    // and for an anonymous client; the organiser sees them.
+    // Before the close no bot has played a private maze, by construction: no match of
+    // the private set exists (the admin sees every match), the private board is empty for
+    // everyone, its organiser included, and says the final run comes after the close.
     let private_t = org_view["public_tournament_id"].as_i64().unwrap() + 1;
-    for token in [None, Some(teams[0].0.clone())] {
+    let private_ids: Vec<i64> = org_view["mazes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["set"] == "private")
+        .map(|m| m["maze_id"].as_i64().unwrap())
+        .collect();
+    assert_eq!(private_ids.len(), 2, "{org_view}");
+    let no_private_match = |list: &Value| {
+        list["items"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|m| !private_ids.contains(&m["maze_id"].as_i64().unwrap()))
+    };
+    let (_, all) = server.get("/api/matches?limit=200", Some(ADMIN)).await;
+    assert!(all["items"].as_array().unwrap().len() >= 12, "{all}");
+    assert!(
+        no_private_match(&all),
+        "a private-set match before the close: {all}"
+    );
+    for token in [None, Some(teams[0].0.clone()), Some(organiser.clone())] {
         let (s, v) = call(
             Method::GET,
             "/api/competitions/class-2027/leaderboard?board=private".into(),
@@ -253,35 +290,11 @@ async fn play_a_competition(server: &TestServer) {
         assert_eq!(
             (
                 v["sealed"].as_bool(),
-                v["standings"].as_array().map(Vec::len)
+                v["standings"].as_array().map(Vec::len),
+                v["final_run"].is_null()
             ),
-            (Some(true), Some(0)),
+            (Some(true), Some(0), true),
             "{v}"
-        );
-        let (s, _) = call(
-            Method::GET,
-            format!("/api/tournaments/{private_t}"),
-            None,
-            token.clone(),
-        )
-        .await;
-        assert_eq!(s, 404);
-        let (s, _) = call(
-            Method::GET,
-            format!("/api/leaderboard?tournament={private_t}"),
-            None,
-            token.clone(),
-        )
-        .await;
-        assert_eq!(s, 404);
-        let (_, list) = call(Method::GET, "/api/tournaments".into(), None, token.clone()).await;
-        assert!(
-            list["items"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .all(|t| t["tournament_id"] != private_t),
-            "{list}"
         );
         let (_, list) = call(
             Method::GET,
@@ -291,52 +304,29 @@ async fn play_a_competition(server: &TestServer) {
         )
         .await;
         assert_eq!(list["items"].as_array().unwrap().len(), 0, "{list}");
-        let (_, list) = call(
-            Method::GET,
-            "/api/matches?limit=200".into(),
-            None,
-            token.clone(),
-        )
-        .await;
-        assert!(
-            list["items"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .all(|m| m["tournament_id"] != private_t)
-        );
     }
-    let (_, org_matches) = server
+    // An entrant's own view holds no private-set match, and its hidden public-set
+    // matches show no seed (the competition's seeds are secret until the results).
+    let (_, mine) = server
         .get(
-            &format!("/api/matches?tournament_id={private_t}&limit=200"),
-            Some(&organiser),
+            &format!("/api/matches?bot_id={}&limit=200", teams[0].1),
+            Some(&teams[0].0),
         )
         .await;
-    let private_match = org_matches["items"][0]["match_id"].as_i64().unwrap();
-    for token in [None, Some(teams[0].0.as_str())] {
-        let (s, _) = server
-            .get(&format!("/api/matches/{private_match}"), token)
-            .await;
-        assert_eq!(s, 404);
-        let (s, _) = server
-            .get(&format!("/api/matches/{private_match}/replay"), token)
-            .await;
-        assert_eq!(s, 404);
-        let (s, _, _) = server
-            .get_raw(&format!("/api/matches/{private_match}/replay.html"), token)
-            .await;
-        assert_eq!(s, 404);
+    assert_eq!(mine["items"].as_array().unwrap().len(), 4, "{mine}");
+    assert!(no_private_match(&mine), "{mine}");
+    for m in mine["items"].as_array().unwrap() {
+        assert_eq!(m["maze_hidden"], true, "{m}");
+        assert!(m["seed"].is_null(), "a hidden match shows its seed: {m}");
+        assert!(m["score"].is_null(), "{m}");
     }
-    for page in [
-        format!("/matches/{private_match}"),
-        format!("/tournaments/{private_t}"),
-    ] {
+    for page in [format!("/tournaments/{private_t}")] {
         assert_eq!(server.get_text(&page).await.0, 404, "{page}");
     }
     let (s, page) = server.get_text("/competitions/class-2027").await;
     assert_eq!(s, 200);
     assert!(
-        page.contains("Sealed until the close") && page.contains("ada-bot"),
+        page.contains("No bot plays a private maze before the close") && page.contains("ada-bot"),
         "{page}"
     );
     assert_eq!(
@@ -354,15 +344,69 @@ async fn play_a_competition(server: &TestServer) {
         !pages.contains("private ranking"),
         "the tournaments page lists the private set"
     );
-    let (_, private_board) = server
-        .get(
-            "/api/competitions/class-2027/leaderboard?board=private",
-            Some(&organiser),
+
+    // Another organiser: no edit, no sealed view, no handing over (the admin's).
+    let (s, o) = server
+        .post(
+            "/api/organisers",
+            json!({"name": "other-teacher"}),
+            Some(ADMIN),
         )
         .await;
+    assert_eq!(s, 201, "{o}");
+    let other = o["key"].as_str().unwrap().to_string();
+    for body in [
+        json!({"title": "mine now"}),
+        json!({"closes_at": at(now_ms())}),
+        json!({"organiser": "other-teacher"}),
+    ] {
+        let (s, v) = call(
+            Method::PATCH,
+            "/api/competitions/class-2027".into(),
+            Some(body),
+            Some(other.clone()),
+        )
+        .await;
+        assert_eq!(s, 403, "{v}");
+    }
+    let (s, v) = call(
+        Method::PATCH,
+        "/api/competitions/class-2027".into(),
+        Some(json!({"organiser": "other-teacher"})),
+        Some(organiser.clone()),
+    )
+    .await;
+    assert_eq!(s, 403, "only the admin hands a competition over: {v}");
+    let (_, other_view) = server
+        .get("/api/competitions/class-2027", Some(&other))
+        .await;
+    assert!(other_view["seeds"].is_null(), "{other_view}");
     assert!(
-        !private_board["sealed"].as_bool().unwrap(),
-        "{private_board}"
+        other_view["mazes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|m| m["set"] != "practice")
+            .all(|m| m["maze_id"].is_null()),
+        "{other_view}"
+    );
+    // A hidden ranking maze of this competition is refused in another one, and the
+    // answer names neither the competition nor the maze.
+    let reuse = json!({
+        "name": "other-cup", "title": "Other cup",
+        "opens_at": at(now_ms()), "closes_at": at(now_ms() + 3_600_000),
+        "mazes": {"practice": [], "public": [maze("copied", 9002)], "private": [maze("x", 9106)]},
+    });
+    let (s, v) = server.post("/api/competitions", reuse, Some(&other)).await;
+    assert_eq!(s, 409, "{v}");
+    let message = v["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("hidden ranking maze of another competition"),
+        "{message}"
+    );
+    assert!(
+        !message.contains("class-2027") && !message.contains("pub-a"),
+        "{message}"
     );
 
     // The public set's tournament shows its standings on the competition's board only.
@@ -484,6 +528,17 @@ async fn play_a_competition(server: &TestServer) {
             .contains("1 of 1 practice matches"),
         "{v}"
     );
+    // The quota is the entrant's, all its bots together: a second bot of Ada's, not
+    // entered, is refused the practice maze too.
+    let second = json!({"name": "ada-spare", "command": "python3 simple_bot.py", "files": simple_bot_files()});
+    let (s, b) = server.post("/api/bots", second, Some(&ada)).await;
+    assert_eq!(s, 201, "{b}");
+    let spare = json!({"bot_id": b["bot_id"], "maze_id": practice, "seed": 2});
+    let (s, v) = server.post("/api/matches", spare, Some(&ada)).await;
+    assert_eq!(
+        s, 429,
+        "a second bot practises past the entrant's quota: {v}"
+    );
     // Ada's second version gets ranked too; she sees its public numbers, the public
     // board (frozen) still shows her first version but to the organisers.
     wait_for(
@@ -557,6 +612,8 @@ async fn play_a_competition(server: &TestServer) {
         v["state"] == "final"
     })
     .await;
+    // The final run was the private set's only run: 3 selected versions x 2 mazes.
+    assert_eq!(c["final_run"], json!({"played": 6, "total": 6}), "{c}");
     assert_eq!(
         c["seeds"].as_array().unwrap().len(),
         70,
@@ -589,6 +646,11 @@ async fn play_a_competition(server: &TestServer) {
         assert_eq!(manifest["mazes"].as_array().unwrap().len(), 2);
         assert_eq!(manifest["seeds"].as_array().unwrap().len(), 1);
         assert_eq!(manifest["limits"]["move_timeout_ms"], 2000);
+        // Everything a re-run needs but secrets: the runtime, the build, the declared
+        // variables' names (none here).
+        for key in ["runtime", "build_command", "env", "command"] {
+            assert!(manifest.get(key).is_some(), "{key}: {manifest}");
+        }
         assert_eq!(
             manifest["bundle_sha256"].as_str().map(str::len),
             Some(64),
@@ -597,7 +659,7 @@ async fn play_a_competition(server: &TestServer) {
     }
     let (_, page) = server.get_text("/competitions/class-2027").await;
     assert!(
-        page.contains("Final results") && !page.contains("Sealed until the close"),
+        page.contains("Final results") && !page.contains("before the close: the private"),
         "{page}"
     );
     assert!(
@@ -678,9 +740,10 @@ async fn play_a_competition(server: &TestServer) {
     }
     // The final run's tournament is open to all now; the matches played under the
     // competition's limits.
+    let final_t = manifest["tournament_id"].as_i64().unwrap();
     let (_, list) = server
         .get(
-            &format!("/api/matches?tournament_id={private_t}&limit=1"),
+            &format!("/api/matches?tournament_id={final_t}&limit=1"),
             None,
         )
         .await;
@@ -690,7 +753,7 @@ async fn play_a_competition(server: &TestServer) {
     );
     // The ranking's running sums leave out the competition's tournaments, as the
     // count from the match table does; each of its tournaments has its own.
-    assert_standings_equal_recount(&server.database, &[public_t, private_t]).await;
+    assert_standings_equal_recount(&server.database, &[public_t, private_t, final_t]).await;
 }
 
 /// A standing line states its uncertainty: an interval that holds `mean`, and a rank

@@ -509,7 +509,15 @@ fn tournaments_survive_killed_servers_workers_and_database() {
             // is up); the killed ones' rows are stale.
             let deadline = Instant::now() + Duration::from_secs(30);
             loop {
-                let health = get(&client, &site.base, "/healthz").await.unwrap();
+                let health = client
+                    .get(format!("{}/healthz", site.base))
+                    .bearer_auth(ADMIN)
+                    .send()
+                    .await
+                    .unwrap()
+                    .json::<Value>()
+                    .await
+                    .unwrap();
                 let live = health["workers"].as_array().unwrap();
                 let workers = live.iter().filter(|w| w["role"] == "worker").count();
                 if workers == 3 {

@@ -546,6 +546,9 @@ async fn an_api_only_server_needs_no_sandbox_and_one_that_plays_refuses_without_
         (Some("unused"), Some("unused")),
         "{health}"
     );
+    // The counts are the admin's.
+    assert!(health.get("workers").is_none(), "{health}");
+    let (_, health) = server.get("/healthz", Some(ADMIN)).await;
     assert_eq!(health["workers"], json!([]), "{health}");
 }
 

@@ -96,7 +96,7 @@ async fn the_server_reports_its_workers_in_health_metrics_and_pages() {
     let server = TestServer::start(dir.path(), &["--jobs", "1"]);
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
     let worker = loop {
-        let (s, health) = server.get("/healthz", None).await;
+        let (s, health) = server.get("/healthz", Some(ADMIN)).await;
         assert_eq!(s, 200, "{health}");
         if let Some(w) = health["workers"].as_array().and_then(|a| a.first()) {
             break w.clone();
@@ -110,7 +110,16 @@ async fn the_server_reports_its_workers_in_health_metrics_and_pages() {
     let id = worker["worker_id"].as_str().unwrap();
     let html = page(&server, "/workers").await;
     assert!(html.contains(id), "{html}");
-    let metrics = page(&server, "/metrics").await;
+    let metrics = server
+        .client()
+        .get(format!("{}/metrics", server.base))
+        .bearer_auth(ADMIN)
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
     assert!(
         metrics
             .lines()

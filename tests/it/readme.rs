@@ -285,7 +285,10 @@ async fn the_readme_scale_out_example_runs_as_written_on_postgresql() {
     let (played, health) = loop {
         let m = answer(client.get(format!("{base}/api/matches/{id}"))).await;
         if m["status"] != "queued" && m["status"] != "running" {
-            break (m, answer(client.get(format!("{base}/healthz"))).await);
+            let health = client
+                .get(format!("{base}/healthz"))
+                .bearer_auth("use-a-long-random-secret");
+            break (m, answer(health).await);
         }
         assert!(Instant::now() < deadline, "the match was not played: {m}");
         tokio::time::sleep(Duration::from_millis(100)).await;

@@ -76,17 +76,20 @@ pub(super) async fn competition_page(
                 "matches per version per ranking maze".into(),
                 v.repeats.to_string(),
             ),
-            (
-                "final run".into(),
-                if v.final_repeats > 0 {
-                    format!(
-                        "{} matches per selected version per private maze",
-                        v.final_repeats
-                    )
+            ("final run".into(), {
+                let repeats = if v.final_repeats > 0 {
+                    v.final_repeats
                 } else {
-                    "none: the private set's ranking matches decide".into()
-                },
-            ),
+                    v.repeats
+                };
+                let mut text = format!(
+                    "after the close: {repeats} matches per selected version per private maze (the private set's only run)"
+                );
+                if let Some(p) = v.final_run {
+                    text.push_str(&format!("; {} of {} played", p.played, p.total));
+                }
+                text
+            }),
             (
                 "versions per entrant per 24 hours".into(),
                 v.versions_per_day.to_string(),

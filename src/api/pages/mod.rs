@@ -292,6 +292,7 @@ async fn tournament_page(
         &Caller::Anonymous,
         t.done >= t.total,
         t.competition_id.is_some(),
+        false,
     );
     let mut bots: Vec<(i64, String)> = Vec::new();
     let mut mazes: Vec<(i64, String)> = Vec::new();

@@ -47,7 +47,26 @@ const DENIED_ALWAYS: &[i64] = &[
     libc::SYS_fanotify_init,
     libc::SYS_lookup_dcookie,
     libc::SYS_personality,
+    // Probes of the host's page cache, which every sandbox shares: whether a page of a
+    // file is cached, without reading it (docs/SECURITY.md, "Page cache"). Linux AIO
+    // goes too: its requests carry RWF_NOWAIT in memory the filter cannot read.
+    libc::SYS_mincore,
+    SYS_CACHESTAT,
+    libc::SYS_io_setup,
+    libc::SYS_io_submit,
 ];
+
+/// `cachestat(2)` (Linux 6.5): the page-cache state of a range of a file. The same
+/// number on every architecture.
+const SYS_CACHESTAT: i64 = 451;
+
+/// `RWF_NOWAIT`: a read or write that fails instead of waiting for the disk, so that a
+/// read tells whether its pages were cached.
+const RWF_NOWAIT: u64 = 0x8;
+
+/// System calls refused with `EPERM` when their flags (argument `.1`) hold
+/// `RWF_NOWAIT`: `preadv2` and `pwritev2` (flags are their sixth argument).
+const NOWAIT_CALLS: &[(i64, u8)] = &[(libc::SYS_preadv2, 5), (libc::SYS_pwritev2, 5)];
 
 /// System calls refused with `EPERM` that a warm match's init makes before its walls
 /// (mounts; its supervisor's `clone` makes the namespaces): put on each match
@@ -137,6 +156,19 @@ pub fn match_filters() -> Result<Vec<BpfProgram>, FilterError> {
 fn deny(denied: &[i64], clone_flags: bool) -> Result<BpfProgram, FilterError> {
     let mut rules: BTreeMap<i64, Vec<SeccompRule>> =
         denied.iter().map(|&nr| (nr, Vec::new())).collect();
+    if denied.contains(&libc::SYS_mincore) {
+        for &(nr, arg) in NOWAIT_CALLS {
+            let rule = SeccompCondition::new(
+                arg,
+                SeccompCmpArgLen::Dword,
+                SeccompCmpOp::MaskedEq(RWF_NOWAIT),
+                RWF_NOWAIT,
+            )
+            .and_then(|c| SeccompRule::new(vec![c]))
+            .map_err(|e| FilterError(e.to_string()))?;
+            rules.insert(nr, vec![rule]);
+        }
+    }
     if clone_flags {
         let clone_rules = NAMESPACE_FLAGS
             .iter()

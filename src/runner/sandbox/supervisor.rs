@@ -236,7 +236,10 @@ fn exit_code(status: libc::c_int) -> i32 {
     }
 }
 
-/// Clones the match's init into new PID, mount and IPC namespaces: its pidfd and pid.
+/// Clones the match's init into new PID, mount, IPC and network namespaces: its pidfd
+/// and pid. A network namespace of its own holds every counter and table a bot can move
+/// (`/proc/net/*`, abstract sockets, the loopback's counters): nothing of one match
+/// reaches the next.
 fn start(
     request: &Request,
     jail: &jail::JailArgs,
@@ -247,6 +250,7 @@ fn start(
     let flags = libc::CLONE_NEWPID
         | libc::CLONE_NEWNS
         | libc::CLONE_NEWIPC
+        | libc::CLONE_NEWNET
         | libc::CLONE_PIDFD
         | libc::SIGCHLD;
     // SAFETY: a clone without a new stack, like fork(2): this process has one thread
@@ -440,6 +444,35 @@ fn prepare(request: &Request, tree: &OwnedFd) -> Result<(), String> {
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
     attach(tree, BOT_FILES).map_err(|e| format!("attaching the bot's folder: {e}"))?;
+    loopback_up().map_err(|e| format!("bringing up the match's loopback: {e}"))?;
+    Ok(())
+}
+
+/// Brings up the loopback of the match's own network namespace, as bubblewrap does for
+/// a one-shot sandbox's: a bot may listen on and talk to itself, never beyond.
+fn loopback_up() -> std::io::Result<()> {
+    // SAFETY: socket(2) with constant arguments; the descriptor is owned below.
+    let fd = unsafe { libc::socket(libc::AF_INET, libc::SOCK_DGRAM | libc::SOCK_CLOEXEC, 0) };
+    if fd < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: a descriptor just made and owned by nothing else.
+    let socket = unsafe { OwnedFd::from_raw_fd(fd) };
+    // SAFETY: ifreq is plain data; zeroed is a valid value.
+    let mut req: libc::ifreq = unsafe { std::mem::zeroed() };
+    for (to, from) in req.ifr_name.iter_mut().zip(b"lo\0") {
+        *to = *from as libc::c_char;
+    }
+    // SAFETY: SIOCGIFFLAGS and SIOCSIFFLAGS read and write the ifreq given.
+    unsafe {
+        if libc::ioctl(socket.as_raw_fd(), libc::SIOCGIFFLAGS, &mut req) < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        req.ifr_ifru.ifru_flags |= libc::IFF_UP as libc::c_short;
+        if libc::ioctl(socket.as_raw_fd(), libc::SIOCSIFFLAGS, &req) < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+    }
     Ok(())
 }
 

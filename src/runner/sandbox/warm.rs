@@ -1,11 +1,12 @@
 //! Warm sandboxes: a sandbox kept for many matches of a worker slot, so that a match does
-//! not pay for bubblewrap, the view's mounts, a network namespace and a cgroup of its own
+//! not pay for bubblewrap, the view's mounts and a cgroup of its own
 //! (docs/PERFORMANCE.md).
 //!
 //! A warm sandbox is bubblewrap with a match's view, minus the bot's folder and scratch
 //! area, running the supervisor ([`super::supervisor`]) in a cgroup of its own. Each
-//! match gets, from the supervisor, fresh PID, mount and IPC namespaces with a fresh
-//! `/proc` and scratch tmpfs, the bot's folder attached read-only, and the same jail step
+//! match gets, from the supervisor, fresh PID, mount, IPC and network namespaces (so no
+//! counter, table or socket name of one match reaches the next) with a fresh `/proc`
+//! and scratch tmpfs, the bot's folder attached read-only, and the same jail step
 //! as a one-shot sandbox. Between matches the runner checks that nothing of the last one
 //! is left: its init has ended and been reaped, and the cgroup holds only the sandbox's
 //! own processes; the cgroup's counters are read as differences from the match's start

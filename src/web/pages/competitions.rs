@@ -49,7 +49,7 @@ pub struct CompetitionPage {
     pub ranking: Vec<(String, String, Option<i64>)>,
     /// The public board.
     pub public: Board,
-    /// The private board (sealed before the close).
+    /// The private board (the final run's, after the close).
     pub private: Option<Board>,
     /// The final results, once written.
     pub results: Option<Vec<ResultRow>>,
@@ -178,7 +178,12 @@ pub fn competition(p: &CompetitionPage) -> String {
         (board_table(&p.public.standings))
         @if let Some(private) = &p.private {
             h2 { "Private leaderboard" }
-            @if private.sealed { p.muted.sealed { "Sealed until the close." } } @else { (board_table(&private.standings)) }
+            @if private.sealed {
+                @match private.final_run {
+                    Some(run) => p.muted.sealed #final-run { "The final run is playing: " (run.played) " of " (run.total) " matches played. The private board comes with the results." },
+                    None => p.muted.sealed { "No bot plays a private maze before the close: the private set's only run is the final run, after the close." },
+                }
+            } @else { (board_table(&private.standings)) }
         }
         @if c.kind != "default" {
             h2 { "My submissions" }

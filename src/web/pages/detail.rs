@@ -125,7 +125,7 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
             div.card { "status" b { (status(r.status.as_str())) } }
             div.card { "score" b { @if r.status == "finished" { (score(r.score)) } @else { "-" } } }
             div.card { "run 0 / run 1 steps" b { (opt(r.run0_steps)) " / " (opt(r.run1_steps)) } }
-            div.card { "seed" b { (r.seed) } }
+            div.card { "seed" b { @if r.maze_hidden { "-" } @else { (r.seed) } } }
             @if let Some(t) = r.tournament_id {
                 div.card { "tournament" b { a href={ "/tournaments/" (t) } { (t) } } }
             }

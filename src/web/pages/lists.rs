@@ -188,7 +188,7 @@ pub fn match_table(lines: &[MatchLine]) -> Markup {
                             td.time { (time(l.row.created_at)) }
                             td.name { a href={ "/bots/" (l.row.bot_id) } { (l.row.bot_name) } span.muted { " v" (l.row.version) } }
                             td.name { a href={ "/mazes/" (l.row.maze_id) } { (l.row.maze_name) } }
-                            td.num { (l.row.seed) }
+                            td.num { @if l.row.maze_hidden { span.muted { "-" } } @else { (l.row.seed) } }
                             td { (status(l.row.status.as_str())) }
                             td.num { @if l.row.status == "finished" { (score(l.row.score)) } @else { span.muted { "-" } } }
                             td.num { (opt(l.row.run0_steps)) }
