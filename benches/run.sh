@@ -148,12 +148,14 @@ log "the fair claim"
 
 log "ranking throughput"
 {
-  echo "## Ranking throughput in a competition"
+  echo "## Competitions: ranking and the close"
   echo
-  echo "\`bash benches/competition.sh $T_RUNS\`: a competition with 20 ranking mazes (10 public, 10 private,"
-  echo "12 x 12) x 3 repeats; the time from a version's upload to its full public and private"
-  echo "standing (every one of its 60 matches counted), beside the same 60 matches queued as a"
-  echo "plain tournament on the same server in the same round (the floor). \`--jobs 2\`, full sandbox."
+  echo "\`bash benches/competition.sh $T_RUNS\`, \`--jobs 2\`, full sandbox, one server. First: the time from a"
+  echo "version's upload to its full public standing (10 public mazes x 3 repeats), beside the same 30"
+  echo "matches queued as a plain tournament on the same server in the same round (the floor). Then the"
+  echo "close: 100 entrants with a bot each; the private set (4 mazes) is played only by the final run,"
+  echo "after the close: the time from the close to the results, beside the same 400 matches as a plain"
+  echo "tournament in the same round (the floor)."
   echo
   bash benches/competition.sh "$T_RUNS"
   echo

@@ -294,6 +294,8 @@ async fn edit_competition(
         caller.require_admin()?;
     }
     let c = ops::edit(&state.storage, c, patch, now_ms()).await?;
+    // A close moved to now is acted on at once by the competitions' clock.
+    state.wake.notify_waiters();
     Ok(axum::Json(view(&state, &c, &caller).await?))
 }
 

@@ -33,12 +33,15 @@ pub const DEFAULT_MAZES: &[(&str, &str)] = &[
     ("gen-16-s3", include_str!("../../mazes/gen-16-s3.txt")),
 ];
 
-/// Settings of `mazearena serve`; every flag can also come from its `MAZEARENA_*` variable.
 /// How often the competitions' clock runs when nothing wakes it: a competition closes
 /// within this long of its time, and a version made ready elsewhere (another server's
 /// build) is queued on its competition's ranking sets within this long.
 const COMPETITION_TICK: Duration = Duration::from_millis(500);
 
+/// How often the competitions' clock looks while a competition is closing.
+const CLOSING_TICK: Duration = Duration::from_millis(50);
+
+/// Settings of `mazearena serve`; every flag can also come from its `MAZEARENA_*` variable.
 #[derive(Debug, Args)]
 pub struct ServeArgs {
     /// Address to listen on (port 0: any free port; the chosen address is printed).
@@ -353,16 +356,30 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         // workers; it wakes them when it queued matches.
         let storage = storage.clone();
         tokio::spawn(async move {
-            let mut every = tokio::time::interval(COMPETITION_TICK);
-            every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+            let mut wait = Duration::ZERO;
             loop {
                 let woken = clock_wake.notified();
                 tokio::select! {
-                    _ = every.tick() => {}
+                    _ = tokio::time::sleep(wait) => {}
                     _ = woken => tokio::time::sleep(Duration::from_millis(10)).await,
                 }
+                wait = COMPETITION_TICK;
                 let now = crate::storage::now_ms();
                 match crate::registry::competitions::tick(&storage, now).await {
+                    Ok(r) if r.closing > 0 => {
+                        // A close is under way: its last matches and final run are
+                        // looked at often, so that the results follow them closely.
+                        wait = CLOSING_TICK;
+                        if r.ranked > 0 || r.selected > 0 || r.finalized > 0 {
+                            clock_wake.notify_waiters();
+                            tracing::info!(
+                                ranked = r.ranked,
+                                selected = r.selected,
+                                finalized = r.finalized,
+                                "competitions moved on"
+                            )
+                        }
+                    }
                     Ok(r) if r != Default::default() => {
                         if r.ranked > 0 || r.selected > 0 {
                             clock_wake.notify_waiters();

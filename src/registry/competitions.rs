@@ -716,6 +716,9 @@ pub struct TickReport {
     pub selected: usize,
     /// Competitions whose results were written.
     pub finalized: usize,
+    /// Closed competitions still waiting for their last matches or their final run
+    /// (the clock looks at them more often).
+    pub closing: usize,
 }
 
 /// The clock's work at `now`: queues every new ready version of an entered bot on its
@@ -763,6 +766,7 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
         }
         storage.unseal_private_set(&c).await?;
         if storage.competition_work_left(&c).await? > 0 {
+            report.closing += 1;
             continue;
         }
         match c.state.as_deref() {
@@ -772,6 +776,7 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
                 let private = in_set(&mazes, "private");
                 if storage.start_final(&c, &selected, &private).await? {
                     report.selected += 1;
+                    report.closing += 1;
                 }
             }
             Some("final_run") if finalize(storage, &c).await? => report.finalized += 1,
@@ -1177,6 +1182,61 @@ mod tests {
         assert_eq!(lines[2], "1,1-2,1,b,'@sum,2,4,3,260.5,250,270,0.75,abc");
     }
 
+    /// The close is one instant: a version whose upload passed every check before the
+    /// close but reaches the database after it is not stored (the clock would never
+    /// rank it), and one stored before it is ranked.
+    #[tokio::test]
+    async fn a_version_that_loses_the_race_with_the_close_is_not_stored() {
+        for (db, _guard) in backends().await {
+            let now = now_ms();
+            let c = create(&db, spec(now), None).await.unwrap();
+            let e = db.create_entrant("e", "[]", "k").await.unwrap();
+            let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
+            db.set_bot_entrant(v.bot_id, e.entrant_id).await.unwrap();
+            db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
+                .await
+                .unwrap();
+            // Checked while open (no refusal), then the close passes before it is stored.
+            let checked = check_upload(&db, v.bot_id, now).await.unwrap().unwrap();
+            let stored = db
+                .add_bot_version_within(v.bot_id, &plain_version(), &checked)
+                .await
+                .unwrap();
+            assert!(stored.is_ok(), "{stored:?}");
+            edit(
+                &db,
+                c,
+                Patch {
+                    closes_at: Some(Timestamp(now)),
+                    ..Patch::default()
+                },
+                now,
+            )
+            .await
+            .unwrap();
+            let late = db
+                .add_bot_version_within(v.bot_id, &plain_version(), &checked)
+                .await
+                .unwrap();
+            assert!(
+                matches!(&late, Err(crate::storage::bots::VersionRefusal::Closed { name, .. }) if name == "c"),
+                "{late:?}"
+            );
+            let versions = db
+                .submissions(
+                    &db.get_competition("c").await.unwrap().unwrap(),
+                    e.entrant_id,
+                )
+                .await
+                .unwrap();
+            assert_eq!(
+                versions.len(),
+                2,
+                "the late one was not stored: {versions:?}"
+            );
+        }
+    }
+
     #[tokio::test]
     async fn each_step_of_the_clock_happens_once_and_the_results_equal_a_recount() {
         for (db, _guard) in backends().await {
@@ -1253,7 +1313,10 @@ mod tests {
             assert!(!seeds[..2].contains(&seeds[2]));
             assert_eq!(
                 tick(&db, later).await.unwrap(),
-                TickReport::default(),
+                TickReport {
+                    closing: 1,
+                    ..TickReport::default()
+                },
                 "the final run waits"
             );
             let private = board(&db, &c, BoardKind::Private, true, later)

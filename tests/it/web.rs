@@ -500,7 +500,11 @@ async fn a_competition_page_shows_an_entrants_submissions_in_a_real_browser() {
             && html.contains("Be &lt;i&gt;kind&lt;/i&gt;."),
         "{html}"
     );
-    assert!(b.text("p.sealed").await.contains("Sealed until the close"));
+    assert!(
+        b.text("p.sealed")
+            .await
+            .contains("No bot plays a private maze before the close")
+    );
     assert!(b.text("table.board").await.contains("team-b"));
     b.client
         .find(fantoccini::Locator::Css("#mine-key"))

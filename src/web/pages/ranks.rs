@@ -16,10 +16,14 @@ pub(super) fn rank_cell(rank: i64, u: &Uncertainty) -> Markup {
     }
 }
 
-/// The interval of the mean score.
+/// The interval of the mean score (a dash when it is withheld over hidden matches).
 pub(super) fn interval_cell(u: &Uncertainty) -> Markup {
     html! {
-        td.num.interval { (format!("{:.3}–{:.3}", u.low, u.high)) }
+        @if u.withheld {
+            td.num.interval title="not shown over hidden matches: it would tell single matches" { "-" }
+        } @else {
+            td.num.interval { (format!("{:.3}–{:.3}", u.low, u.high)) }
+        }
     }
 }
 
@@ -43,7 +47,9 @@ pub(super) fn header_cells() -> Markup {
 /// The rules under a table: the order, the tie-break, what the interval and the tie
 /// groups mean; and a warning when a bot has a single run on a maze.
 pub(super) fn ranking_note<'a>(runs_per_maze: impl IntoIterator<Item = &'a Uncertainty>) -> Markup {
-    let single = runs_per_maze.into_iter().any(|u| u.runs_per_maze == 1);
+    let lines: Vec<&Uncertainty> = runs_per_maze.into_iter().collect();
+    let single = lines.iter().any(|u| u.runs_per_maze == 1);
+    let withheld = lines.iter().any(|u| u.withheld);
     html! {
         p.muted.ranking-note {
             "Lower mean score ranks first; equal means share a rank and are listed by name. "
@@ -53,6 +59,9 @@ pub(super) fn ranking_note<'a>(runs_per_maze: impl IntoIterator<Item = &'a Uncer
             "different from their group's first bot (a paired test on the mazes and seeds both played)."
             @if single {
                 " Some bots have one run on a maze: the luck of a randomized bot is not measured there (play more seeds per maze)."
+            }
+            @if withheld {
+                " Over hidden mazes no interval, rank range or tie group is shown but what the means say: with few hidden matches they would tell each match's score."
             }
         }
     }
