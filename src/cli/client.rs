@@ -288,7 +288,7 @@ fn manifest_bot(dir: &Path, name: Option<&str>) -> anyhow::Result<BotManifest> {
 pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
     let (mut cfg, path, api) = session()?;
     let bot = manifest_bot(&args.dir, args.bot.as_deref())?;
-    let packed = pack::pack(&args.dir)?;
+    let packed = pack::pack(&args.dir, &bot.include)?;
     anyhow::ensure!(
         !packed.files.is_empty(),
         "{} has no file to upload",

@@ -3,7 +3,8 @@
 //!
 //! - [`config`]: the server and key a participant logged in with, kept in a file only
 //!   they can read (or given by `MAZEARENA_SERVER` and `MAZEARENA_KEY`).
-//! - [`pack`]: a bot's folder packed as the server stores it (`.gitignore` honoured).
+//! - [`pack`]: a bot's folder packed as the server stores it (`.gitignore` honoured,
+//!   dot-files left out unless `bot.toml` names them in `include`).
 //! - [`show`]: server text made safe to print (no control character of the server's
 //!   reaches the terminal).
 //! - [`Api`]: the HTTP calls, each failure turned into a [`ClientError`] that says what

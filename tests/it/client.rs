@@ -596,3 +596,100 @@ async fn a_maze_named_with_escapes_is_shown_escaped_by_practice_and_matches() {
         assert!(stdout.contains(shown), "{args:?}: {stdout}");
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn submit_sends_no_dot_file_unless_bot_toml_includes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "1"]);
+    let (_, v) = server
+        .post("/api/entrants", json!({"name": "team-dot"}), None)
+        .await;
+    let key = v["key"].as_str().unwrap().to_string();
+    let config = dir.path().join("client.toml");
+    ok(
+        &client(&config, &["login", &server.base, "--key", &key], &[]),
+        "login",
+    );
+    // A parent folder's .gitignore brings dot-files back; the build lists what arrived.
+    let work = dir.path().join("work");
+    let bot = work.join("bot");
+    let manifest = "name = \"dotty\"\ncommand = \"python3 simple_bot.py\"\nbuild = \"ls -A\"\n";
+    python_bot(&bot, manifest);
+    std::fs::write(work.join(".gitignore"), "!.env\n!.*\n").unwrap();
+    std::fs::write(bot.join(".env"), "TOKEN=not-for-the-server\n").unwrap();
+    let stored = |version: i64| {
+        let server = &server;
+        let key = key.clone();
+        async move {
+            let (_, me) = server.get("/api/me", Some(&key)).await;
+            let id = me["bots"][0]["bot_id"].as_i64().unwrap();
+            let (_, bot) = server.get(&format!("/api/bots/{id}"), Some(&key)).await;
+            let (_, log) = server
+                .get(
+                    &format!("/api/bots/{id}/versions/{version}/build-log"),
+                    Some(&key),
+                )
+                .await;
+            let v = bot["versions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|v| v["version"] == version)
+                .cloned()
+                .unwrap();
+            (
+                v["file_count"].as_i64().unwrap(),
+                log["build_log"].as_str().unwrap_or("").to_string(),
+                bot["versions"].as_array().unwrap().len(),
+            )
+        }
+    };
+
+    let out = client(&config, &["submit", bot.to_str().unwrap()], &[]);
+    ok(&out, "submit without include");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("packed 3 files"),
+        "{out:?}"
+    );
+    let (files, log, _) = stored(1).await;
+    assert_eq!(files, 3, "{log}");
+    assert!(
+        log.contains("simple_bot.py") && !log.contains(".env"),
+        "{log}"
+    );
+
+    // Named in `include`: sent.
+    std::fs::write(
+        bot.join("bot.toml"),
+        format!("{manifest}include = [\".env\"]\n"),
+    )
+    .unwrap();
+    ok(
+        &client(&config, &["submit", bot.to_str().unwrap()], &[]),
+        "submit with include",
+    );
+    let (files, log, _) = stored(2).await;
+    assert_eq!(files, 4, "{log}");
+    assert!(log.contains(".env"), "{log}");
+
+    // An include outside the folder, or not a regular file: refused before uploading.
+    std::fs::write(work.join("secret"), "x").unwrap();
+    for (include, why) in [
+        ("../secret", "`..` may not be used"),
+        ("/etc/passwd", "an absolute path may not be used"),
+        (".missing", "there is no such file"),
+    ] {
+        std::fs::write(
+            bot.join("bot.toml"),
+            format!("{manifest}include = [{include:?}]\n"),
+        )
+        .unwrap();
+        let said = failed(
+            &client(&config, &["submit", bot.to_str().unwrap()], &[]),
+            include,
+        );
+        assert!(said.contains(why), "{include}: {said}");
+    }
+    let (_, _, versions) = stored(2).await;
+    assert_eq!(versions, 2);
+}
