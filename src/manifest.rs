@@ -8,6 +8,7 @@
 //! report = "seed 004, section 4.1"  # optional: where the strategy comes from
 //! claimed = { test_maze_01 = 18.133 } # optional: scores its author reported, by maze name
 //! env = { ALPHA = "0.5" }         # optional: environment variables for the bot
+//! include = [".env"]              # optional: dot-files `mazearena submit` sends too
 //! ```
 //! A folder with several bots lists them as `[[bot]]` tables with the same keys.
 
@@ -48,6 +49,11 @@ pub struct BotManifest {
     /// `GET /api/runtimes` lists, e.g. a venv with numpy); `mazearena submit` sends it.
     #[serde(default)]
     pub runtime: Option<String>,
+    /// Files `mazearena submit` uploads although it leaves them out otherwise (a name
+    /// starting with `.`, or one a `.gitignore` names): relative paths of regular files
+    /// inside the folder, checked when packing ([`crate::client::pack::pack`]).
+    #[serde(default)]
+    pub include: Vec<String>,
     /// The folder (where the manifest is); filled in when loading.
     #[serde(skip)]
     pub dir: PathBuf,

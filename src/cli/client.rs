@@ -1,6 +1,9 @@
 //! `mazearena` as a client of a server: `login`, `logout`, `submit`, `status`,
 //! `matches`, `logs`, `practice`, and `replay ID` (in [`super::replay`]). Every HTTP
 //! failure is reported with the server's own message ([`crate::client::ClientError`]).
+//!
+//! Every text that comes from the server (names, statuses, messages, logs) is printed
+//! through [`show`], so none of its control characters reaches the terminal raw.
 
 use std::io::{BufRead, IsTerminal};
 use std::path::{Path, PathBuf};
@@ -12,6 +15,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{Value, json};
 
 use crate::client::config::{self, Config, OwnedBot};
+use crate::client::show::{self, text};
 use crate::client::{Api, ClientError, pack};
 use crate::manifest::BotManifest;
 
@@ -180,7 +184,7 @@ fn pick<'a>(
             _ => bail!(
                 "you have several bots ({}): say which with --bot NAME",
                 bots.iter()
-                    .map(|b| b.1.as_str())
+                    .map(|b| text(&b.1))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
@@ -224,9 +228,9 @@ pub fn login(args: LoginArgs) -> anyhow::Result<()> {
     cfg.key = api.key().map(str::to_string);
     cfg.save(&path)?;
     let who = match (kind.as_str(), entrant) {
-        ("entrant", Some(name)) => format!("entrant {name}"),
+        ("entrant", Some(name)) => format!("entrant {}", text(&name)),
         ("owner", _) => "the owner of a bot".to_string(),
-        (k, _) => k.to_string(),
+        (k, _) => text(k).into_owned(),
     };
     println!(
         "logged in to {} as {who} ({}); kept in {}",
@@ -284,7 +288,7 @@ fn manifest_bot(dir: &Path, name: Option<&str>) -> anyhow::Result<BotManifest> {
 pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
     let (mut cfg, path, api) = session()?;
     let bot = manifest_bot(&args.dir, args.bot.as_deref())?;
-    let packed = pack::pack(&args.dir)?;
+    let packed = pack::pack(&args.dir, &bot.include)?;
     anyhow::ensure!(
         !packed.files.is_empty(),
         "{} has no file to upload",
@@ -303,7 +307,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                 packed
                     .skipped
                     .iter()
-                    .map(|p| p.display().to_string())
+                    .map(|p| text(&p.display().to_string()).into_owned())
                     .collect::<Vec<_>>()
                     .join(", "),
                 if packed.skipped.len() == 1 {
@@ -390,7 +394,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                     message,
                     ..
                 }) => {
-                    eprintln!("competition {c}: {message}")
+                    eprintln!("competition {c}: {}", text(&message))
                 }
                 Err(e) => return Err(e.into()),
             }
@@ -412,12 +416,12 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                     .get(&format!("/api/bots/{bot_id}/versions/{version}/build-log"))
                     .await
                     .unwrap_or(Value::Null);
-                if let Some(text) = log["build_log"].as_str() {
-                    eprintln!("--- build log ---\n{}", text.trim_end());
+                if let Some(log) = log["build_log"].as_str() {
+                    eprintln!("--- build log ---\n{}", show::log(log.trim_end()));
                 }
                 bail!("version {version} failed to build: it will not play ({page})")
             }
-            other => bail!("version {version}: {other}"),
+            other => bail!("version {version}: {}", text(other)),
         }
     })
 }
@@ -461,10 +465,11 @@ async fn follow_build(
             .and_then(|x| x["build_status"].as_str())
             .unwrap_or("building")
             .to_string();
+        let shown = text(&status);
         if status != said {
-            spinner.set_message(format!("version {version}: {status}"));
+            spinner.set_message(format!("version {version}: {shown}"));
             if spinner.is_hidden() {
-                eprintln!("version {version}: {status}");
+                eprintln!("version {version}: {shown}");
             }
             said.clone_from(&status);
         }
@@ -543,7 +548,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<()> {
         if args.json {
             println!(
                 "{}",
-                serde_json::to_string_pretty(&json!({
+                show::json(&json!({
                     "server": api.server(), "kind": kind, "entrant": entrant,
                     "bots": out_bots, "competitions": competitions,
                 }))?
@@ -552,22 +557,22 @@ pub fn status(args: StatusArgs) -> anyhow::Result<()> {
         }
         println!(
             "{}{}",
-            api.server(),
-            entrant.map_or_else(String::new, |e| format!(", entrant {e}"))
+            text(api.server()),
+            entrant.map_or_else(String::new, |e| format!(", entrant {}", text(&e)))
         );
         if out_bots.is_empty() {
             println!("no bot yet: `mazearena submit DIR` uploads one");
         }
         for b in &out_bots {
             println!();
-            println!("{} (bot {}){}", b["name"].as_str().unwrap_or(""), b["bot_id"],
+            println!("{} (bot {}){}", text(b["name"].as_str().unwrap_or("")), b["bot_id"],
                 if b["paused"] == true { " - paused" } else { "" });
             let versions = b["versions"].as_array().cloned().unwrap_or_default();
             for v in versions.iter().rev().take(3) {
                 println!(
                     "  version {:<3} {:<13} {}",
-                    v["version"],
-                    v["build_status"].as_str().unwrap_or(""),
+                    show::value(&v["version"]),
+                    text(v["build_status"].as_str().unwrap_or("")),
                     crate::web::layout::time(v["created_at"].as_i64().unwrap_or(0))
                 );
             }
@@ -575,11 +580,11 @@ pub fn status(args: StatusArgs) -> anyhow::Result<()> {
                 if let Some(s) = b[key].as_object() {
                     println!(
                         "  {label}: rank {} (possible {}), mean score {:.3} (95% interval {:.3}-{:.3}), {} played",
-                        s["rank"], s["uncertainty"]["rank_range"].as_str().unwrap_or("?"),
+                        show::value(&s["rank"]), text(s["uncertainty"]["rank_range"].as_str().unwrap_or("?")),
                         s["mean_score"].as_f64().unwrap_or(0.0),
                         s["uncertainty"]["low"].as_f64().unwrap_or(0.0),
                         s["uncertainty"]["high"].as_f64().unwrap_or(0.0),
-                        s["played"]
+                        show::value(&s["played"])
                     );
                 }
             }
@@ -587,16 +592,16 @@ pub fn status(args: StatusArgs) -> anyhow::Result<()> {
         for c in &competitions {
             println!();
             let s = &c["submissions"];
-            println!("competition {} ({})", c["competition"].as_str().unwrap_or(""), c["phase"].as_str().unwrap_or(""));
-            println!("  {}", s["versions_quota"]["message"].as_str().unwrap_or(""));
-            println!("  {}", s["practice_quota"]["message"].as_str().unwrap_or(""));
+            println!("competition {} ({})", text(c["competition"].as_str().unwrap_or("")), text(c["phase"].as_str().unwrap_or("")));
+            println!("  {}", text(s["versions_quota"]["message"].as_str().unwrap_or("")));
+            println!("  {}", text(s["practice_quota"]["message"].as_str().unwrap_or("")));
             if let Some(v) = s["versions"].as_array().and_then(|a| a.last()) {
-                println!("  latest version {}: {}", v["version"], v["status"].as_str().unwrap_or(""));
+                println!("  latest version {}: {}", show::value(&v["version"]), text(v["status"].as_str().unwrap_or("")));
             }
             if let Some(l) = c["public_board"].as_object() {
                 println!(
                     "  public board: rank {} (possible {}), mean score {:.3}",
-                    l["rank"], l["uncertainty"]["rank_range"].as_str().unwrap_or("?"),
+                    show::value(&l["rank"]), text(l["uncertainty"]["rank_range"].as_str().unwrap_or("?")),
                     l["mean_score"].as_f64().unwrap_or(0.0)
                 );
             }
@@ -665,14 +670,18 @@ pub fn matches(args: MatchesArgs) -> anyhow::Result<()> {
             let maze = mazes
                 .iter()
                 .find(|z| Some(z.0) == m["maze_id"].as_i64())
-                .map_or_else(|| m["maze_id"].to_string(), |z| z.1.clone());
+                .map_or_else(|| show::value(&m["maze_id"]), |z| text(&z.1).into_owned());
             let steps = |k: &str| m[k].as_i64().map_or("-".into(), |s| s.to_string());
             println!(
                 "{:>6}  {:<20} {:<16} {:<14} {:>9} {:>5} {:>5}  {}",
-                m["match_id"],
-                format!("{} v{}", m["bot"].as_str().unwrap_or(""), m["bot_version"]),
+                show::value(&m["match_id"]),
+                format!(
+                    "{} v{}",
+                    text(m["bot"].as_str().unwrap_or("")),
+                    show::value(&m["bot_version"])
+                ),
                 maze,
-                m["status"].as_str().unwrap_or(""),
+                text(m["status"].as_str().unwrap_or("")),
                 score_text(&m["score"]),
                 steps("run0_steps"),
                 steps("run1_steps"),
@@ -699,23 +708,25 @@ pub fn logs(args: LogsArgs) -> anyhow::Result<()> {
         let log: Value = owner.get(&format!("/api/matches/{id}/log")).await?;
         println!(
             "match {id}: {}{}",
-            log["status"].as_str().unwrap_or(""),
+            text(log["status"].as_str().unwrap_or("")),
             log["step"]
                 .as_u64()
                 .map_or_else(String::new, |s| format!(" at step {s}"))
         );
         if let Some(e) = log.get("error").filter(|e| !e.is_null()) {
             if let Some(reason) = e["reason"].as_str() {
-                println!("reason: {reason}");
+                println!("reason: {}", text(reason));
             } else {
-                println!("error: {e}");
+                println!("error: {}", show::value(e));
             }
         }
         if log["redacted"] == true {
             println!("(a hidden maze's match: only its status and the failure's step are shown)");
         }
         match log["stderr_tail"].as_str() {
-            Some(t) if !t.is_empty() => println!("--- stderr (last 64 KiB) ---\n{}", t.trim_end()),
+            Some(t) if !t.is_empty() => {
+                println!("--- stderr (last 64 KiB) ---\n{}", show::log(t.trim_end()))
+            }
             Some(_) => println!("(the bot wrote nothing to stderr)"),
             None => {}
         }
@@ -832,8 +843,9 @@ pub fn practice(args: PracticeArgs) -> anyhow::Result<()> {
             }
         }
         println!(
-            "queued {} of {bot_name} ({})",
+            "queued {} of {} ({})",
             super::count(queued.len() as i64, "match", "matches"),
+            text(&bot_name),
             queued
                 .iter()
                 .map(|q| q.0.to_string())
@@ -869,9 +881,9 @@ pub fn practice(args: PracticeArgs) -> anyhow::Result<()> {
             let steps = |k: &str| m[k].as_i64().map_or("-".into(), |s| s.to_string());
             println!(
                 "{:>6}  {:<16} {:<14} {:>5} {:>5} {:>9} {:>8}",
-                m["match_id"],
-                name,
-                m["status"].as_str().unwrap_or(""),
+                show::value(&m["match_id"]),
+                text(name),
+                text(m["status"].as_str().unwrap_or("")),
                 steps("run0_steps"),
                 steps("run1_steps"),
                 score_text(&m["score"]),

@@ -3,12 +3,16 @@
 //!
 //! - [`config`]: the server and key a participant logged in with, kept in a file only
 //!   they can read (or given by `MAZEARENA_SERVER` and `MAZEARENA_KEY`).
-//! - [`pack`]: a bot's folder packed as the server stores it (`.gitignore` honoured).
+//! - [`pack`]: a bot's folder packed as the server stores it (`.gitignore` honoured,
+//!   dot-files left out unless `bot.toml` names them in `include`).
+//! - [`show`]: server text made safe to print (no control character of the server's
+//!   reaches the terminal).
 //! - [`Api`]: the HTTP calls, each failure turned into a [`ClientError`] that says what
 //!   the server said, not how HTTP failed.
 
 pub mod config;
 pub mod pack;
+pub mod show;
 
 use std::time::Duration;
 
@@ -17,11 +21,12 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_json::Value;
 
-/// Why a call to the server did not work.
+/// Why a call to the server did not work. Its text ([`std::fmt::Display`]) shows what
+/// came from the server escaped ([`show::text`]), so it can be printed as it is.
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     /// The server answered with an error: its own message.
-    #[error("{message} (HTTP {status} from {what})")]
+    #[error("{} (HTTP {status} from {})", show::text(.message), show::text(.what))]
     Refused {
         /// The HTTP status.
         status: u16,
@@ -34,7 +39,11 @@ pub enum ClientError {
         retry_after: Option<u64>,
     },
     /// The server could not be reached or its answer not read.
-    #[error("cannot reach the server at {server}: {reason}")]
+    #[error(
+        "cannot reach the server at {}: {}",
+        show::text(.server),
+        show::text(.reason)
+    )]
     Unreachable {
         /// The server's address.
         server: String,
@@ -42,7 +51,11 @@ pub enum ClientError {
         reason: String,
     },
     /// The server answered something that is not what mazearena answers.
-    #[error("the server's answer to {what} is not what a mazearena server sends: {reason}")]
+    #[error(
+        "the server's answer to {} is not what a mazearena server sends: {}",
+        show::text(.what),
+        show::text(.reason)
+    )]
     Unexpected {
         /// The request.
         what: String,

@@ -1,12 +1,15 @@
 //! A bot's folder packed for upload: its files as a `.tar.gz`, in a fixed order with
 //! fixed times (the same folder gives the same archive), leaving out what `.gitignore`
 //! files name (the folder's and those of the folders above it, in or out of a git
-//! checkout), hidden files and folders (`.git`, `.venv`...), and anything but regular
-//! files. Executable bits are kept; the server stores the files, not the archive.
+//! checkout), every file or folder whose name starts with `.` (`.git`, `.venv`, `.env`...,
+//! whatever a `.gitignore` says: a `!.env` there does not bring one back), and anything
+//! but regular files. The one way to send a dot-file is to name it in `bot.toml`'s
+//! `include` list ([`pack`]'s `include`). Executable bits are kept; the server stores the
+//! files, not the archive.
 
 use std::io::Write;
 use std::os::unix::fs::PermissionsExt;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 /// A packed folder.
 #[derive(Debug)]
@@ -19,11 +22,18 @@ pub struct Packed {
     pub skipped: Vec<PathBuf>,
 }
 
-/// Packs `dir`.
+/// Whether a name is a dot-file's or a dot-folder's (left out unless included).
+fn is_dot(name: &std::ffi::OsStr) -> bool {
+    name.as_encoded_bytes().starts_with(b".")
+}
+
+/// Packs `dir`, with the files `include` names (relative paths inside `dir`, from
+/// `bot.toml`) added even when they are dot-files or a `.gitignore` names them.
 ///
 /// # Errors
-/// A folder or file that cannot be read.
-pub fn pack(dir: &Path) -> anyhow::Result<Packed> {
+/// A folder or file that cannot be read; an `include` entry that is empty, absolute,
+/// goes up with `..`, passes through a link, or is not a regular file.
+pub fn pack(dir: &Path, include: &[String]) -> anyhow::Result<Packed> {
     let mut files = Vec::new();
     let mut skipped = Vec::new();
     let walk = ignore::WalkBuilder::new(dir)
@@ -35,6 +45,9 @@ pub fn pack(dir: &Path) -> anyhow::Result<Packed> {
         .parents(true)
         .ignore(false)
         .follow_links(false)
+        // `hidden` alone gives way to a `.gitignore`'s `!.env`: a dot-name is left out
+        // here whatever the ignore files say (the folder itself, depth 0, may be one).
+        .filter_entry(|e| e.depth() == 0 || !is_dot(e.file_name()))
         .build();
     for entry in walk {
         let entry = entry.map_err(|e| anyhow::anyhow!("cannot read {}: {e}", dir.display()))?;
@@ -53,6 +66,12 @@ pub fn pack(dir: &Path) -> anyhow::Result<Packed> {
             files.push(rel);
         } else {
             skipped.push(rel);
+        }
+    }
+    for name in include {
+        let rel = included(dir, name)?;
+        if !files.contains(&rel) {
+            files.push(rel);
         }
     }
     files.sort();
@@ -85,6 +104,53 @@ pub fn pack(dir: &Path) -> anyhow::Result<Packed> {
     })
 }
 
+/// The path an `include` entry names, relative to `dir`, checked: a relative path
+/// without `..` whose folders are real folders (not links) inside `dir` and whose end
+/// is a regular file.
+fn included(dir: &Path, name: &str) -> anyhow::Result<PathBuf> {
+    let refuse = |why: &str| {
+        anyhow::anyhow!(
+            "bot.toml's include {name:?}: {why} (name files inside {} by their relative \
+             path, e.g. include = [\".env\"])",
+            dir.display()
+        )
+    };
+    let mut rel = PathBuf::new();
+    for part in Path::new(name).components() {
+        match part {
+            Component::Normal(p) => rel.push(p),
+            Component::CurDir => {}
+            Component::ParentDir => return Err(refuse("`..` may not be used")),
+            Component::RootDir | Component::Prefix(_) => {
+                return Err(refuse("an absolute path may not be used"));
+            }
+        }
+    }
+    if rel.as_os_str().is_empty() {
+        return Err(refuse("it names no file"));
+    }
+    let mut at = dir.to_path_buf();
+    let parts: Vec<_> = rel.components().collect();
+    for (i, part) in parts.iter().enumerate() {
+        at.push(part);
+        let meta = std::fs::symlink_metadata(&at).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => refuse("there is no such file"),
+            _ => refuse(&format!("cannot read {}: {e}", at.display())),
+        })?;
+        let last = i + 1 == parts.len();
+        if meta.file_type().is_symlink() {
+            return Err(refuse("it is or passes through a symbolic link"));
+        }
+        if last && !meta.is_file() {
+            return Err(refuse("it is not a regular file"));
+        }
+        if !last && !meta.is_dir() {
+            return Err(refuse(&format!("{} is not a folder", at.display())));
+        }
+    }
+    Ok(rel)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -112,7 +178,7 @@ mod tests {
         std::fs::set_permissions(bot.join("run.sh"), std::fs::Permissions::from_mode(0o700))
             .unwrap();
         std::os::unix::fs::symlink("/etc/passwd", bot.join("link")).unwrap();
-        let p = pack(&bot).unwrap();
+        let p = pack(&bot, &[]).unwrap();
         let names: Vec<String> = p.files.iter().map(|f| f.display().to_string()).collect();
         // The kit's `/minimal_bot` (a build) is left out, its source folder of the same
         // name is not; so are the parent's `*.o`, hidden files and classes/.
@@ -133,6 +199,81 @@ mod tests {
         assert!(modes.contains(&("run.sh".into(), 0o755)), "{modes:?}");
         assert!(modes.contains(&("bot.toml".into(), 0o644)), "{modes:?}");
         // The same folder, the same archive.
-        assert_eq!(pack(&bot).unwrap().archive, p.archive);
+        assert_eq!(pack(&bot, &[]).unwrap().archive, p.archive);
+    }
+
+    /// A bot folder under a parent whose `.gitignore` brings dot-files back.
+    fn folder_with_dot_files() -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join(".gitignore"), "!.env\n!.secrets/\n!.*\n").unwrap();
+        let bot = dir.path().join("bot");
+        std::fs::create_dir_all(bot.join(".secrets")).unwrap();
+        std::fs::create_dir_all(bot.join("conf")).unwrap();
+        for f in [
+            "bot.toml",
+            "bot.py",
+            ".env",
+            ".secrets/key",
+            "conf/.local",
+            "conf/a.txt",
+        ] {
+            std::fs::write(bot.join(f), f).unwrap();
+        }
+        (dir, bot)
+    }
+
+    fn names(p: &Packed) -> Vec<String> {
+        p.files.iter().map(|f| f.display().to_string()).collect()
+    }
+
+    #[test]
+    fn a_dot_file_is_left_out_whatever_a_gitignore_says() {
+        let (_dir, bot) = folder_with_dot_files();
+        let p = pack(&bot, &[]).unwrap();
+        assert_eq!(names(&p), vec!["bot.py", "bot.toml", "conf/a.txt"]);
+    }
+
+    #[test]
+    fn include_is_the_one_way_to_send_a_dot_file() {
+        let (_dir, bot) = folder_with_dot_files();
+        let include = [".env".to_string(), "./conf/.local".into(), "bot.py".into()];
+        let p = pack(&bot, &include).unwrap();
+        assert_eq!(
+            names(&p),
+            vec![".env", "bot.py", "bot.toml", "conf/.local", "conf/a.txt"]
+        );
+        let mut archive = tar::Archive::new(flate2::read::GzDecoder::new(&p.archive[..]));
+        let packed: Vec<String> = archive
+            .entries()
+            .unwrap()
+            .map(|e| e.unwrap().path().unwrap().display().to_string())
+            .collect();
+        assert_eq!(packed, names(&p));
+    }
+
+    #[test]
+    fn include_names_regular_files_inside_the_folder_only() {
+        let (dir, bot) = folder_with_dot_files();
+        std::fs::write(dir.path().join("outside"), "x").unwrap();
+        std::os::unix::fs::symlink(dir.path().join("outside"), bot.join(".link")).unwrap();
+        std::os::unix::fs::symlink(bot.join(".secrets"), bot.join("linked")).unwrap();
+        for (name, why) in [
+            ("../outside", "`..` may not be used"),
+            (".secrets/../.env", "`..` may not be used"),
+            ("/etc/passwd", "an absolute path may not be used"),
+            ("", "it names no file"),
+            (".", "it names no file"),
+            (".secrets", "it is not a regular file"),
+            (".env/x", "is not a folder"),
+            (".missing", "there is no such file"),
+            (".link", "symbolic link"),
+            ("linked/key", "symbolic link"),
+        ] {
+            let err = pack(&bot, &[name.to_string()]).unwrap_err().to_string();
+            assert!(
+                err.contains(why) && err.contains(&format!("include {name:?}")),
+                "{name}: {err}"
+            );
+        }
     }
 }

@@ -312,6 +312,7 @@ mod tests {
             claimed: BTreeMap::new(),
             env: BTreeMap::new(),
             runtime: None,
+            include: Vec::new(),
             dir: folder.path().to_path_buf(),
         };
         let id = register_local(&db, &manifest).await.unwrap();
