@@ -185,13 +185,14 @@ async fn create_entrant(
     crate::registry::bots::check_name(&body.name)
         .map_err(|e| ApiError::Unprocessable(e.to_string().replace("bot name", "entrant name")))?;
     if body.members.len() > MAX_MEMBERS
-        || body
-            .members
-            .iter()
-            .any(|m| m.trim().is_empty() || m.chars().count() > MAX_MEMBER_CHARS)
+        || body.members.iter().any(|m| {
+            m.trim().is_empty()
+                || m.chars().count() > MAX_MEMBER_CHARS
+                || m.chars().any(char::is_control)
+        })
     {
         return Err(ApiError::Unprocessable(format!(
-            "members: at most {MAX_MEMBERS} names of 1 to {MAX_MEMBER_CHARS} characters"
+            "members: at most {MAX_MEMBERS} names of 1 to {MAX_MEMBER_CHARS} characters, no control characters"
         )));
     }
     if !caller.is_admin() {

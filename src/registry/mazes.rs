@@ -21,6 +21,12 @@ pub async fn admit(storage: &Storage, name: &str, text: &[u8], hidden: bool) -> 
             "a maze needs a name of 1 to {MAX_MAZE_NAME_CHARS} characters"
         )));
     }
+    if name.chars().any(char::is_control) {
+        return Err(RegistryError::Invalid(
+            "a maze's name may not hold control characters (they would act on the terminals that show it)"
+                .into(),
+        ));
+    }
     let text = text.to_vec();
     let (maze, optimum) = super::bundles::blocking(move || {
         mazefile::parse(&text).map(|m| {
