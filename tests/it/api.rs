@@ -1492,6 +1492,20 @@ async fn a_bot_encoding_a_hidden_maze_in_its_step_count_leaks_nothing_per_match(
         assert!(Instant::now() < deadline, "the tournament did not end: {v}");
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
+    // Played: the standings show the mean, and over the hidden maze nothing the mean
+    // does not say (an interval over its runs would be made of single matches); the
+    // admin gets the interval.
+    let (_, t) = server.get(&format!("/api/tournaments/{tid}"), None).await;
+    let line = &t["standings"][0];
+    assert_eq!(line["uncertainty"]["withheld"], true, "{t}");
+    assert_eq!(line["uncertainty"]["low"], line["mean_score"], "{t}");
+    assert_eq!(line["uncertainty"]["high"], line["mean_score"], "{t}");
+    assert_eq!(line["uncertainty"]["runs_per_maze"], 0, "{t}");
+    let (_, t) = server
+        .get(&format!("/api/tournaments/{tid}"), Some(ADMIN))
+        .await;
+    assert_eq!(t["standings"][0]["uncertainty"]["withheld"], false, "{t}");
+    assert_eq!(t["standings"][0]["uncertainty"]["runs_per_maze"], 8, "{t}");
     // The admin sees that the matches did end at different steps: the attack was real.
     let (_, all) = server
         .get(&format!("/api/matches?tournament_id={tid}"), Some(ADMIN))

@@ -384,17 +384,60 @@ async fn the_readme_competition_example_runs_as_written() {
         );
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
-    // Closed now; the results come after the final run.
+    // Before the close no bot has played a private maze: no such match exists for
+    // anyone (the admin sees every match), and the private board is empty.
+    let (_, org) = server
+        .get("/api/competitions/maze-cup", Some(crate::support::ADMIN))
+        .await;
+    let private: Vec<i64> = org["mazes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["set"] == "private")
+        .map(|m| m["maze_id"].as_i64().unwrap())
+        .collect();
+    assert_eq!(private.len(), 2, "{org}");
+    let (_, all) = server
+        .get("/api/matches?limit=200", Some(crate::support::ADMIN))
+        .await;
+    let items = all["items"].as_array().unwrap();
+    assert!(!items.is_empty());
+    assert!(
+        items
+            .iter()
+            .all(|m| !private.contains(&m["maze_id"].as_i64().unwrap())),
+        "a private-set match before the close: {all}"
+    );
+    let (_, board) = server
+        .get("/api/competitions/maze-cup/leaderboard?board=private", None)
+        .await;
+    assert_eq!(
+        (board["sealed"].as_bool(), board["final_run"].is_null()),
+        (Some(true), true),
+        "{board}"
+    );
+    // Closed now; the results come after the final run, which the README's `results
+    // --wait` waits for.
     run(&blocks[2]);
-    loop {
-        let (_, c) = server.get("/api/competitions/maze-cup", None).await;
-        if c["state"] == "final" {
-            break;
-        }
-        assert!(Instant::now() < deadline, "no results: {c}");
-        tokio::time::sleep(Duration::from_millis(200)).await;
-    }
     let out = run(&blocks[3]);
+    let (_, c) = server.get("/api/competitions/maze-cup", None).await;
+    assert_eq!(c["state"], "final", "{c}");
+    // The final run: 2 entrants' selected versions x 2 private mazes x 3 repeats.
+    assert_eq!(
+        c["final_run"],
+        serde_json::json!({"played": 12, "total": 12}),
+        "{c}"
+    );
+    let (_, board) = server
+        .get("/api/competitions/maze-cup/leaderboard?board=private", None)
+        .await;
+    assert_eq!(
+        board["standings"].as_array().map(Vec::len),
+        Some(2),
+        "{board}"
+    );
+    let (_, results) = server.get("/api/competitions/maze-cup/results", None).await;
+    assert_eq!(results["recount_equal"], true, "{results}");
     assert!(out.contains("team-ada: bot ada-bot"), "the entrants: {out}");
     assert!(
         out.contains("1 of 5 versions used in the last 24 hours"),
