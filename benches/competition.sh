@@ -35,11 +35,12 @@ trap cleanup EXIT
 ADMIN=bench-admin-token-0123456789
 MAZEARENA_ADMIN_TOKEN=$ADMIN "$BIN" serve --bind "127.0.0.1:$PORT" \
   --database "sqlite://$WORK/db.sqlite" --data-dir "$WORK/data" --jobs 2 \
-  --max-queue 100000 >"$WORK/server.log" 2>&1 &
+  --max-queue 100000 --registrations-per-hour 0 >"$WORK/server.log" 2>&1 &
 SERVER=$!
 for _ in $(seq 100); do curl -sf "http://127.0.0.1:$PORT/healthz" >/dev/null && break; sleep 0.1; done
-# Mazes: 10 public for the ranking, then 2 public and 4 private for each close round.
-N=$((10 + (ROUNDS + 1) * 6))
+# Mazes: 10 public and 1 private for the ranking, then 2 public and 4 private for each
+# close round.
+N=$((11 + (ROUNDS + 1) * 6))
 for i in $(seq "$N"); do "$BIN" maze generate --dim 12 -o "$WORK/maze-$i.txt"; done
 
 python3 - "$PORT" "$ADMIN" "$WORK" "$ROUNDS" <<'PY'
@@ -94,7 +95,7 @@ def tournament(name, bots, maze_ids, repeats):
 med = lambda xs: sorted(xs)[len(xs) // 2]
 
 # 1. Ranking: one entrant's new versions on 10 public mazes x 3.
-c = competition("ranking-bench", mazes(10), [], 3)
+c = competition("ranking-bench", mazes(10), mazes(1), 3)
 ids = [m["maze_id"] for m in c["mazes"] if m["set"] == "public"]
 _, e = call("POST", "/api/entrants", {"name": "bench"}, admin)
 key = e["key"]

@@ -18,10 +18,15 @@ STRIDE=16
 THRESHOLD_US=${THRESHOLD_US:-20}
 BIN=target/release/mazearena
 [ -x "$BIN" ] || cargo build --release --locked
-# The largest file of /usr/lib that anyone may read and that holds the pages needed.
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+# The largest file of /usr/lib that anyone may read, that holds the pages needed and that
+# no process maps (a mapped page is not dropped from the cache).
 need=$((BITS * STRIDE * 4096))
-FILE=$(find /usr/lib -xdev -type f -perm -o=r -size +$((need / 1048576 + 1))M -printf '%s %p\n' 2>/dev/null \
-  | sort -rn | head -1 | cut -d' ' -f2-)
+mapped=$(cat /proc/[0-9]*/maps 2>/dev/null | awk 'NF >= 6 {print $6}' | sort -u || true)
+candidates=$(find /usr/lib -xdev -type f -perm -o=r -size +$((need / 1048576 + 1))M -printf '%s %p\n' 2>/dev/null \
+  | sort -rn | cut -d' ' -f2- | grep -vxF -e "$mapped" || true)
+FILE=${candidates%%$'\n'*}
 [ -n "$FILE" ] || { echo "no file of $need bytes under /usr/lib" >&2; exit 1; }
 echo "file: \`$FILE\`, $BITS bits a round, a page every $STRIDE, threshold ${THRESHOLD_US} µs"
 echo
@@ -36,12 +41,12 @@ PY
   message=$(python3 -c "import random,sys; print(''.join(random.choice('01') for _ in range($BITS)))")
   "$BIN" run --maze mazes/gen-12-s1.txt --bot-dir benches/page_cache --json \
     --bot "python3 send.py $FILE $message $STRIDE" >/dev/null
-  got=$("$BIN" run --maze mazes/gen-12-s1.txt --bot-dir benches/page_cache --json \
-    --bot "python3 recv.py $FILE $BITS $STRIDE $THRESHOLD_US")
-  python3 - "$message" "$r" <<PY
+  "$BIN" run --maze mazes/gen-12-s1.txt --bot-dir benches/page_cache --json \
+    --bot "python3 recv.py $FILE $BITS $STRIDE $THRESHOLD_US" >"$WORK/record.json"
+  python3 - "$message" "$r" "$WORK/record.json" <<'PY'
 import json, math, sys
 message, r = sys.argv[1], sys.argv[2]
-record = json.loads('''$got''')
+record = json.load(open(sys.argv[3]))
 tail = record.get("stderr_tail", "")
 value = int([l for l in tail.splitlines() if l.startswith("BITS ")][0].split()[1], 16)
 times = [l for l in tail.splitlines() if l.startswith("MEDIAN_US")][0].split()

@@ -190,6 +190,22 @@ log "ranked standings"
   done
 } >>"$out"
 
+log "the page cache"
+{
+  echo "## The page cache: what a read-latency probe still carries"
+  echo
+  echo "\`bash benches/page_cache.sh $T_RUNS\`: \`mincore\`, \`cachestat\`, \`preadv2\`/\`pwritev2\` with"
+  echo "\`RWF_NOWAIT\` and Linux AIO are refused in matches and builds; what remains is timing a read."
+  echo "A sender match (\`mazearena run\`, full sandbox) reads page 16k of a large file of /usr for each"
+  echo "1 of a random message (readahead off); a later receiver match, in another sandbox, times a"
+  echo "one-byte read of each such page. The file is dropped from the cache before each round (as"
+  echo "root, outside the sandbox: a stand-in for a file nobody read lately). The bits a match carries"
+  echo "are N x (1 - H(error rate)). What this means for sealed results: docs/SECURITY.md."
+  echo
+  bash benches/page_cache.sh "$T_RUNS"
+  echo
+} >>"$out"
+
 log "bytes per stored match"
 {
   echo "## Bytes per stored match"

@@ -566,7 +566,7 @@ pub(super) async fn check_capacity(state: &AppState, adding: i64) -> ApiResult<(
     if queued + adding > state.settings.max_queue {
         return Err(ApiError::TooManyRequests {
             message: format!(
-                "the match queue is full ({queued} waiting, capacity {}); try again later",
+                "the match queue is full (capacity {}); try again later",
                 state.settings.max_queue
             ),
             retry_after_secs: RETRY_AFTER_SECS,

@@ -110,6 +110,11 @@ async fn the_server_reports_its_workers_in_health_metrics_and_pages() {
     let id = worker["worker_id"].as_str().unwrap();
     let html = page(&server, "/workers").await;
     assert!(html.contains(id), "{html}");
+    // No count that moves with hidden matches: the queue's length, matches played.
+    assert!(
+        !html.contains("matches queued") && !html.contains("<th class=\"num\">matches</th>"),
+        "{html}"
+    );
     let metrics = server
         .client()
         .get(format!("{}/metrics", server.base))

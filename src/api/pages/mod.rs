@@ -255,8 +255,7 @@ async fn workers_page(State(state): State<AppState>) -> ApiResult<Html<String>> 
         .storage
         .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
         .await?;
-    let queued = state.storage.queued_count().await?;
-    Ok(Html(web::workers(&rows, queued)))
+    Ok(Html(web::workers(&rows)))
 }
 
 async fn tournaments_page(

@@ -49,18 +49,20 @@ pub fn bots(rows: &[BotRow]) -> String {
     )
 }
 
-/// The page of the processes playing matches, as they last reported themselves.
-pub fn workers(rows: &[WorkerRow], queued: i64) -> String {
+/// The page of the processes playing matches, as they last reported themselves: without
+/// the queue's length or the matches each has played (they move with matches on hidden
+/// mazes: the admin reads them in `/healthz` and `/metrics`).
+pub fn workers(rows: &[WorkerRow]) -> String {
     page(
         "Workers",
         html! {
             h1 { "Workers" }
-            p.muted { (queued) " matches queued. Workers that reported in the last 30 seconds:" }
+            p.muted { "Workers that reported in the last 30 seconds:" }
             @if rows.is_empty() { p.muted { "No worker is playing matches." } } @else {
                 table.data.workers {
                     thead { tr {
                         th { "worker" } th { "role" } th { "host" } th.num { "pid" }
-                        th.num { "jobs" } th { "sandbox" } th.num { "matches" }
+                        th.num { "jobs" } th { "sandbox" }
                         th { "started" } th { "last seen" }
                     } }
                     tbody {
@@ -72,7 +74,6 @@ pub fn workers(rows: &[WorkerRow], queued: i64) -> String {
                                 td.num { (w.pid) }
                                 td.num { (w.jobs) }
                                 td { (status(&w.sandbox)) }
-                                td.num { (w.matches_done) }
                                 td { (time(w.started_at)) }
                                 td { (time(w.last_seen)) }
                             }
