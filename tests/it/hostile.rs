@@ -813,3 +813,55 @@ async fn a_tournament_and_a_server_carry_nothing_from_one_match_to_the_next() {
     }
     nothing_left("carry_over.py");
 }
+
+/// A warm match's mount table names no host path of the server: the bot's folder is an
+/// overlay of a detached tree (shown as `/`), and the runner's program is not mounted in
+/// the match at all. Through the library's warm sandbox (the hostile folder and the test
+/// binary's paths) and a real server (its data folder).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_warm_matchs_mount_table_names_no_host_path_of_the_server() {
+    let Some(_) = full_sandbox("hostile mount table") else {
+        return;
+    };
+    if !nix::unistd::geteuid().is_root() {
+        eprintln!("SKIPPED hostile mount table: warm sandboxes are used by a runner that is root");
+        return;
+    }
+    let folder = root().join(HOSTILE).display().to_string();
+    let program = env!("CARGO_BIN_EXE_mazearena").to_string();
+    let r = tokio::task::spawn_blocking(move || {
+        attack_warm("mount_table.py", &[&folder, &program], &[])
+    })
+    .await
+    .unwrap();
+    assert_eq!(r["status"], "step_limit", "{r}");
+    contained(&r, 2);
+
+    let tmp = tempfile::tempdir().unwrap();
+    let server = TestServer::start(tmp.path(), &["--jobs", "1"]);
+    let data = tmp.path().display().to_string();
+    let (bot_id, token) = register(
+        &server,
+        "mounts",
+        &format!("python3 mount_table.py {data}"),
+        hostile_files("mount_table.py"),
+    )
+    .await;
+    let (s, m) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": bot_id, "maze_id": 1}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 202, "{m}");
+    let id = m["match_id"].as_i64().unwrap();
+    let played = wait_match(&server, id).await;
+    assert_eq!(played["status"], "step_limit", "{played}");
+    let (_, log) = server
+        .get(&format!("/api/matches/{id}/log"), Some(&token))
+        .await;
+    let tail = log["stderr_tail"].as_str().unwrap_or("");
+    assert!(!tail.contains("HOSTILE LEAK"), "{tail}");
+    assert!(tail.contains("HOSTILE BLOCKED not-found"), "{tail}");
+}
