@@ -366,12 +366,16 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 wait = COMPETITION_TICK;
                 let now = crate::storage::now_ms();
                 match crate::registry::competitions::tick(&storage, now).await {
-                    Ok(r) if r.closing > 0 => {
-                        // A close is under way: its last matches and final run are
-                        // looked at often, so that the results follow them closely.
-                        wait = CLOSING_TICK;
-                        if r.ranked > 0 || r.selected > 0 || r.finalized > 0 {
+                    Ok(r) => {
+                        if r.closing > 0 {
+                            // A close is under way: its last matches and final run are
+                            // looked at often, so that the results follow them closely.
+                            wait = CLOSING_TICK;
+                        }
+                        if r.ranked > 0 || r.selected > 0 {
                             clock_wake.notify_waiters();
+                        }
+                        if r.ranked > 0 || r.selected > 0 || r.finalized > 0 {
                             tracing::info!(
                                 ranked = r.ranked,
                                 selected = r.selected,
@@ -380,18 +384,6 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
                             )
                         }
                     }
-                    Ok(r) if r != Default::default() => {
-                        if r.ranked > 0 || r.selected > 0 {
-                            clock_wake.notify_waiters();
-                        }
-                        tracing::info!(
-                            ranked = r.ranked,
-                            selected = r.selected,
-                            finalized = r.finalized,
-                            "competitions moved on"
-                        )
-                    }
-                    Ok(_) => {}
                     Err(e) => {
                         tracing::warn!(error = %e, "the competitions' clock failed; trying again")
                     }

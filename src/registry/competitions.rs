@@ -607,32 +607,33 @@ pub async fn board(
             || (!r.pending && frozen_at.is_none_or(|f| r.created_at < f || phase == Phase::Closed))
     });
     let mut standings = latest_per_bot(kept);
-    if let (Some(t), false) = (tournament, standings.is_empty()) {
-        let samples = storage.standing_samples(Scope::Tournament(t)).await?;
-        rankings::rank_lines(
+    // Over hidden mazes, nothing but the means for anyone but the organisers: an
+    // interval over few hidden matches would show single matches' scores.
+    let revealed =
+        kind == BoardKind::Private && c.reveal_private_mazes && c.state.as_deref() == Some("final");
+    let set = |l: &mut BoardLine, rank, u| {
+        l.rank = rank;
+        l.uncertainty = u;
+    };
+    match (tournament, standings.is_empty()) {
+        (Some(_), false) if !organiser && !revealed => rankings::rank_lines_withheld(
             &mut standings,
-            &samples,
             |l| l.mean_score,
             |l| l.bot_name.as_str(),
-            |l| (l.bot_id, l.version),
-            |l, rank, u| {
-                l.rank = rank;
-                l.uncertainty = u;
-            },
-        );
-        // Over hidden mazes, nothing but the means for anyone but the organisers: an
-        // interval over few hidden matches would show single matches' scores.
-        let revealed = kind == BoardKind::Private
-            && c.reveal_private_mazes
-            && c.state.as_deref() == Some("final");
-        if !organiser && !revealed {
-            rankings::withhold_lines(
+            set,
+        ),
+        (Some(t), false) => {
+            let samples = storage.standing_samples(Scope::Tournament(t)).await?;
+            rankings::rank_lines(
                 &mut standings,
-                |l| l.rank,
+                &samples,
                 |l| l.mean_score,
-                |l, u| l.uncertainty = u,
+                |l| l.bot_name.as_str(),
+                |l| (l.bot_id, l.version),
+                set,
             );
         }
+        _ => {}
     }
     Ok(Board {
         board: kind,
@@ -679,22 +680,24 @@ fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
 pub async fn results(storage: &Storage, c: &CompetitionRow) -> Result<Vec<ResultRow>> {
     let mut rows = storage.competition_results(c.competition_id).await?;
     if let (Some(t), false) = (deciding_tournament(c), rows.is_empty()) {
-        let samples = storage.standing_samples(Scope::Tournament(t)).await?;
-        rankings::rank_lines(
-            &mut rows,
-            &samples,
-            |r| r.mean_score,
-            |r| r.entrant_name.as_str(),
-            |r| (r.bot_id, r.version),
-            |r, _, u| r.uncertainty = u,
-        );
+        // The private mazes stay hidden: their matches' scores are never shown, so
+        // neither is anything that would tell them (the means and ranks only).
+        if c.reveal_private_mazes {
+            let samples = storage.standing_samples(Scope::Tournament(t)).await?;
+            rankings::rank_lines(
+                &mut rows,
+                &samples,
+                |r| r.mean_score,
+                |r| r.entrant_name.as_str(),
+                |r| (r.bot_id, r.version),
+                |r, _, u| r.uncertainty = u,
+            );
+        }
         rows.sort_by(|a, b| {
             a.rank
                 .cmp(&b.rank)
                 .then(a.entrant_name.cmp(&b.entrant_name))
         });
-        // The private mazes stay hidden: their matches' scores are never shown, so
-        // neither is anything that would tell them (the means and ranks only).
         if !c.reveal_private_mazes {
             rankings::withhold_lines(
                 &mut rows,
@@ -1142,6 +1145,32 @@ mod tests {
         .await;
     }
 
+    /// An entrant ("e") with a bot ("b") entered in `c`.
+    async fn entered_bot(
+        db: &Storage,
+        c: &CompetitionRow,
+    ) -> (
+        crate::storage::entrants::EntrantRow,
+        crate::storage::bots::BotVersionRow,
+    ) {
+        let e = db.create_entrant("e", "[]", "k").await.unwrap();
+        let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
+        db.set_bot_entrant(v.bot_id, e.entrant_id).await.unwrap();
+        db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
+            .await
+            .unwrap();
+        (e, v)
+    }
+
+    /// `c` closed at `now`.
+    async fn close_now(db: &Storage, c: CompetitionRow, now: i64) -> CompetitionRow {
+        let patch = Patch {
+            closes_at: Some(Timestamp(now)),
+            ..Patch::default()
+        };
+        edit(db, c, patch, now).await.unwrap()
+    }
+
     async fn sealed(db: &Storage, t: Option<i64>) -> bool {
         db.get_tournament(t.unwrap()).await.unwrap().unwrap().sealed
     }
@@ -1190,12 +1219,7 @@ mod tests {
         for (db, _guard) in backends().await {
             let now = now_ms();
             let c = create(&db, spec(now), None).await.unwrap();
-            let e = db.create_entrant("e", "[]", "k").await.unwrap();
-            let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
-            db.set_bot_entrant(v.bot_id, e.entrant_id).await.unwrap();
-            db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
-                .await
-                .unwrap();
+            let (e, v) = entered_bot(&db, &c).await;
             // Checked while open (no refusal), then the close passes before it is stored.
             let checked = check_upload(&db, v.bot_id, now).await.unwrap().unwrap();
             let stored = db
@@ -1203,17 +1227,7 @@ mod tests {
                 .await
                 .unwrap();
             assert!(stored.is_ok(), "{stored:?}");
-            edit(
-                &db,
-                c,
-                Patch {
-                    closes_at: Some(Timestamp(now)),
-                    ..Patch::default()
-                },
-                now,
-            )
-            .await
-            .unwrap();
+            close_now(&db, c, now).await;
             let late = db
                 .add_bot_version_within(v.bot_id, &plain_version(), &checked)
                 .await
@@ -1250,12 +1264,7 @@ mod tests {
             bad.mazes.public = vec![maze(7001)];
             let err = create(&db, bad, None).await.unwrap_err();
             assert!(err.to_string().contains("must be hidden"), "{err}");
-            let e = db.create_entrant("e", "[]", "k").await.unwrap();
-            let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
-            db.set_bot_entrant(v.bot_id, e.entrant_id).await.unwrap();
-            db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
-                .await
-                .unwrap();
+            let (_, v) = entered_bot(&db, &c).await;
             // Ranked once: 1 public maze x 2 repeats, every seed secret; no private match
             // before the close.
             assert_eq!(tick(&db, now).await.unwrap().ranked, 1);
@@ -1286,17 +1295,7 @@ mod tests {
                 assert_eq!(private.final_run, None);
             }
             // Closed: the private set unsealed, the selection and final run made once.
-            let c = edit(
-                &db,
-                c,
-                Patch {
-                    closes_at: Some(Timestamp(now)),
-                    ..Patch::default()
-                },
-                now,
-            )
-            .await
-            .unwrap();
+            let c = close_now(&db, c, now).await;
             let later = now + 1;
             assert_eq!(tick(&db, later).await.unwrap().selected, 1);
             assert!(!sealed(&db, c.private_tournament_id).await);

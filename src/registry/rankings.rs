@@ -69,6 +69,32 @@ pub fn withhold_lines<T>(
     }
 }
 
+/// Ranks `lines` (any order) by mean score as [`rank_lines`] does, with the uncertainty
+/// withheld ([`ranking::withheld`]): no match is read and nothing is bootstrapped, since
+/// nothing of it would be shown.
+pub fn rank_lines_withheld<T>(
+    lines: &mut [T],
+    mean: impl Fn(&T) -> f64,
+    name: impl Fn(&T) -> &str,
+    mut set: impl FnMut(&mut T, i64, Uncertainty),
+) {
+    order_lines(lines, &mean, &name);
+    let means: Vec<f64> = lines.iter().map(&mean).collect();
+    let shown: Vec<(i64, f64)> = means
+        .iter()
+        .map(|&m| {
+            let better = means
+                .iter()
+                .filter(|&&o| o < m && !ranking::same_score(o, m))
+                .count();
+            (1 + better as i64, m)
+        })
+        .collect();
+    for ((line, u), (rank, _)) in lines.iter_mut().zip(ranking::withheld(&shown)).zip(&shown) {
+        set(line, *rank, u);
+    }
+}
+
 /// A standing's own numbers, best first: (bot, version, played, finished, mean's bits).
 type Key = (Scope, Vec<(i64, i64, i64, i64, u64)>);
 

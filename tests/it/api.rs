@@ -634,16 +634,7 @@ async fn hostile_bots_are_recorded_and_the_server_keeps_serving() {
         );
     }
     assert_eq!(server.get("/healthz", None).await.0, 200);
-    let metrics = server
-        .client()
-        .get(format!("{}/metrics", server.base))
-        .bearer_auth(ADMIN)
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let (_, metrics, _) = server.get_raw("/metrics", Some(ADMIN)).await;
     assert!(
         metrics.contains("mazearena_matches{status=\"crashed\"} 2"),
         "{metrics}"
@@ -1370,16 +1361,7 @@ async fn a_match_running_each_time_the_server_dies_is_aborted_and_its_bot_paused
         server.post("/api/matches", again, Some(&token)).await.0,
         202
     );
-    let metrics = server
-        .client()
-        .get(format!("{}/metrics", server.base))
-        .bearer_auth(ADMIN)
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let (_, metrics, _) = server.get_raw("/metrics", Some(ADMIN)).await;
     assert!(
         metrics.contains("mazearena_matches{status=\"aborted\"} 2"),
         "{metrics}"
@@ -1910,30 +1892,17 @@ async fn metrics_and_healthz_counts_are_the_operators() {
         crate::support::simple_bot_files(),
     )
     .await;
-    let metrics = |t: Option<&'static str>| {
-        let server = &server;
-        async move {
-            let mut req = server.client().get(format!("{}/metrics", server.base));
-            if let Some(t) = t {
-                req = req.bearer_auth(t);
-            }
-            let resp = req.send().await.unwrap();
-            (resp.status().as_u16(), resp.text().await.unwrap())
-        }
-    };
-    let (s, body) = metrics(None).await;
-    assert_eq!(s, 401, "{body}");
-    assert!(!body.contains("mazearena_"), "{body}");
-    let owner: &'static str = Box::leak(owner.into_boxed_str());
-    let (s, body) = metrics(Some(owner)).await;
-    assert_eq!(s, 403, "{body}");
-    assert!(!body.contains("mazearena_"), "{body}");
+    for (t, status) in [(None, 401), (Some(owner.as_str()), 403)] {
+        let (s, body, _) = server.get_raw("/metrics", t).await;
+        assert_eq!(s, status, "{body}");
+        assert!(!body.contains("mazearena_"), "{body}");
+    }
     for t in [token, ADMIN] {
-        let (s, body) = metrics(Some(t)).await;
+        let (s, body, _) = server.get_raw("/metrics", Some(t)).await;
         assert_eq!(s, 200, "{body}");
         assert!(body.contains("mazearena_queue_depth"), "{body}");
     }
-    for t in [None, Some(owner)] {
+    for t in [None, Some(owner.as_str())] {
         let (s, health) = server.get("/healthz", t).await;
         assert_eq!(
             (s, health["status"].as_str()),

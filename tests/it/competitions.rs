@@ -257,13 +257,7 @@ async fn play_a_competition(server: &TestServer) {
     // the private set exists (the admin sees every match), the private board is empty for
     // everyone, its organiser included, and says the final run comes after the close.
     let private_t = org_view["public_tournament_id"].as_i64().unwrap() + 1;
-    let private_ids: Vec<i64> = org_view["mazes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|m| m["set"] == "private")
-        .map(|m| m["maze_id"].as_i64().unwrap())
-        .collect();
+    let private_ids = crate::support::private_maze_ids(&org_view);
     assert_eq!(private_ids.len(), 2, "{org_view}");
     let no_private_match = |list: &Value| {
         list["items"]

@@ -739,7 +739,7 @@ async fn a_tournament_and_a_server_carry_nothing_from_one_match_to_the_next() {
     }
     std::fs::write(
         bot.join("bot.toml"),
-        "name = \"carry\"\ncommand = \"python3 carry_over.py\"\n",
+        "name = \"carry\"\ncommand = \"python3 carry_over.py carry-check-daemon\"\n",
     )
     .unwrap();
     std::fs::copy(maze(), mazes.join("m1.txt")).unwrap();
@@ -776,32 +776,18 @@ async fn a_tournament_and_a_server_carry_nothing_from_one_match_to_the_next() {
         );
         assert!(text.contains("HOSTILE INFO counters-moved="), "{text}");
     }
-    nothing_left("carry_over.py");
+    nothing_left("carry-check-daemon");
 
     let server = TestServer::start(tmp.path(), &["--jobs", "1"]);
     let (bot_id, token) = register(
         &server,
         "carry",
-        "python3 carry_over.py",
+        "python3 carry_over.py carry-check-daemon",
         hostile_files("carry_over.py"),
     )
     .await;
     for round in 0..4 {
-        let (s, m) = server
-            .post(
-                "/api/matches",
-                json!({"bot_id": bot_id, "maze_id": 1, "seed": round}),
-                Some(&token),
-            )
-            .await;
-        assert_eq!(s, 202, "{m}");
-        let id = m["match_id"].as_i64().unwrap();
-        let played = wait_match(&server, id).await;
-        assert_eq!(played["status"], "step_limit", "{played}");
-        let (_, log) = server
-            .get(&format!("/api/matches/{id}/log"), Some(&token))
-            .await;
-        let tail = log["stderr_tail"].as_str().unwrap_or("");
+        let tail = played_on_server(&server, bot_id, &token, round).await;
         assert!(
             !tail.contains("HOSTILE LEAK"),
             "server round {round}: {tail}"
@@ -811,7 +797,7 @@ async fn a_tournament_and_a_server_carry_nothing_from_one_match_to_the_next() {
             "server round {round}: {tail}"
         );
     }
-    nothing_left("carry_over.py");
+    nothing_left("carry-check-daemon");
 }
 
 /// A warm match's mount table names no host path of the server: the bot's folder is an
@@ -847,21 +833,28 @@ async fn a_warm_matchs_mount_table_names_no_host_path_of_the_server() {
         hostile_files("mount_table.py"),
     )
     .await;
+    let tail = played_on_server(&server, bot_id, &token, 0).await;
+    assert!(!tail.contains("HOSTILE LEAK"), "{tail}");
+    assert!(tail.contains("HOSTILE BLOCKED not-found"), "{tail}");
+}
+
+/// Plays bot `bot_id` (a hostile fixture that plays to the step limit) once on the
+/// server's first public maze with `seed`, and returns its stderr's tail as its owner
+/// reads it.
+async fn played_on_server(server: &TestServer, bot_id: i64, token: &str, seed: i64) -> String {
     let (s, m) = server
         .post(
             "/api/matches",
-            json!({"bot_id": bot_id, "maze_id": 1}),
-            Some(&token),
+            json!({"bot_id": bot_id, "maze_id": 1, "seed": seed}),
+            Some(token),
         )
         .await;
     assert_eq!(s, 202, "{m}");
     let id = m["match_id"].as_i64().unwrap();
-    let played = wait_match(&server, id).await;
+    let played = wait_match(server, id).await;
     assert_eq!(played["status"], "step_limit", "{played}");
     let (_, log) = server
-        .get(&format!("/api/matches/{id}/log"), Some(&token))
+        .get(&format!("/api/matches/{id}/log"), Some(token))
         .await;
-    let tail = log["stderr_tail"].as_str().unwrap_or("");
-    assert!(!tail.contains("HOSTILE LEAK"), "{tail}");
-    assert!(tail.contains("HOSTILE BLOCKED not-found"), "{tail}");
+    log["stderr_tail"].as_str().unwrap_or("").to_string()
 }

@@ -115,16 +115,7 @@ async fn the_server_reports_its_workers_in_health_metrics_and_pages() {
         !html.contains("matches queued") && !html.contains("<th class=\"num\">matches</th>"),
         "{html}"
     );
-    let metrics = server
-        .client()
-        .get(format!("{}/metrics", server.base))
-        .bearer_auth(ADMIN)
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let (_, metrics, _) = server.get_raw("/metrics", Some(ADMIN)).await;
     assert!(
         metrics
             .lines()

@@ -389,13 +389,7 @@ async fn the_readme_competition_example_runs_as_written() {
     let (_, org) = server
         .get("/api/competitions/maze-cup", Some(crate::support::ADMIN))
         .await;
-    let private: Vec<i64> = org["mazes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|m| m["set"] == "private")
-        .map(|m| m["maze_id"].as_i64().unwrap())
-        .collect();
+    let private = crate::support::private_maze_ids(&org);
     assert_eq!(private.len(), 2, "{org}");
     let (_, all) = server
         .get("/api/matches?limit=200", Some(crate::support::ADMIN))

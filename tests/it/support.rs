@@ -553,3 +553,15 @@ pub fn rust_toolchain() -> PathBuf {
         .expect("cargo is in a bin folder")
         .to_path_buf()
 }
+
+/// The private set's maze ids of a competition as its organiser or the admin sees it
+/// (`GET /api/competitions/{name}`).
+pub fn private_maze_ids(view: &serde_json::Value) -> Vec<i64> {
+    view["mazes"]
+        .as_array()
+        .expect("the competition's mazes")
+        .iter()
+        .filter(|m| m["set"] == "private")
+        .filter_map(|m| m["maze_id"].as_i64())
+        .collect()
+}

@@ -127,7 +127,7 @@ pub fn filters() -> Result<Vec<BpfProgram>, FilterError> {
         .chain(DENIED_PER_MATCH)
         .copied()
         .collect();
-    Ok(vec![deny(&all, true)?, second()?])
+    Ok(vec![deny(&all, true, true)?, second()?])
 }
 
 /// What a warm sandbox's supervisor installs on itself when it starts, before it takes
@@ -136,7 +136,7 @@ pub fn filters() -> Result<Vec<BpfProgram>, FilterError> {
 /// # Errors
 /// [`FilterError`] on an architecture seccompiler does not know.
 pub fn helper_filter() -> Result<BpfProgram, FilterError> {
-    deny(DENIED_ALWAYS, false)
+    deny(DENIED_ALWAYS, false, true)
 }
 
 /// What a warm match's init installs behind its other walls, on top of the supervisor's
@@ -148,15 +148,16 @@ pub fn helper_filter() -> Result<BpfProgram, FilterError> {
 /// # Errors
 /// [`FilterError`] on an architecture seccompiler does not know.
 pub fn match_filters() -> Result<Vec<BpfProgram>, FilterError> {
-    Ok(vec![deny(DENIED_PER_MATCH, true)?, second()?])
+    Ok(vec![deny(DENIED_PER_MATCH, true, false)?, second()?])
 }
 
 /// A filter refusing `denied` with `EPERM` (and `clone` with namespace flags when
-/// `clone_flags`); another architecture is killed.
-fn deny(denied: &[i64], clone_flags: bool) -> Result<BpfProgram, FilterError> {
+/// `clone_flags`, `preadv2`/`pwritev2` with `RWF_NOWAIT` when `nowait`); another
+/// architecture is killed.
+fn deny(denied: &[i64], clone_flags: bool, nowait: bool) -> Result<BpfProgram, FilterError> {
     let mut rules: BTreeMap<i64, Vec<SeccompRule>> =
         denied.iter().map(|&nr| (nr, Vec::new())).collect();
-    if denied.contains(&libc::SYS_mincore) {
+    if nowait {
         for &(nr, arg) in NOWAIT_CALLS {
             let rule = SeccompCondition::new(
                 arg,
