@@ -447,6 +447,7 @@ pub(super) async fn default_board(
                 played: r.played,
                 finished: r.finished,
                 mean_score: r.mean_score,
+                score_sum30: r.score_sum30,
                 finish_rate: r.finish_rate,
                 uncertainty: r.uncertainty,
             })
@@ -522,18 +523,7 @@ async fn submissions(
         let line = public
             .iter()
             .find(|r| r.bot_version_id == s.bot_version_id && !r.pending)
-            .map(|r| BoardLine {
-                rank: 0,
-                entrant: e.name.clone(),
-                bot_id: r.bot_id,
-                bot_name: r.bot_name.clone(),
-                version: r.version,
-                played: r.played,
-                finished: r.finished,
-                mean_score: r.mean_score,
-                finish_rate: r.finish_rate,
-                uncertainty: Default::default(),
-            });
+            .map(BoardLine::from_row);
         let status = if s.build_status == "build_failed" || s.aborted {
             "not_counted"
         } else if line.is_some() {

@@ -169,7 +169,7 @@ pub(super) fn for_caller(mut rows: Vec<Standing>, caller: &Caller) -> Vec<Standi
             crate::registry::rankings::withhold_lines(
                 &mut rows,
                 |r| r.rank,
-                |r| r.mean_score,
+                Standing::mean,
                 |r, u| r.uncertainty = u,
             );
         }

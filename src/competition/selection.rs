@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::ranking::Mean;
+
 /// Which versions of an entrant count at the end.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
@@ -46,7 +48,7 @@ pub struct Candidate {
     /// Its number.
     pub version: i64,
     /// Its public-ranking mean score, once played.
-    pub public_mean: Option<f64>,
+    pub public_mean: Option<Mean>,
     /// Whether the entrant chose it.
     pub chosen: bool,
 }
@@ -62,8 +64,7 @@ pub fn select(rule: Rule, max_selected: usize, candidates: &[Candidate]) -> Vec<
             .filter(|c| c.public_mean.is_some())
             .min_by(|a, b| {
                 a.public_mean
-                    .partial_cmp(&b.public_mean)
-                    .unwrap_or(std::cmp::Ordering::Equal)
+                    .cmp(&b.public_mean)
                     .then(b.version.cmp(&a.version))
             })
             .or(latest)
@@ -109,19 +110,26 @@ pub struct VersionScore {
     pub played: i64,
     /// Of which finished.
     pub finished: i64,
-    /// Mean score, a did-not-finish counting as 1000.
-    pub mean_score: f64,
-    /// finished / played.
-    pub finish_rate: f64,
+    /// Mean score, exact, a did-not-finish counting as 1000.
+    pub mean: Mean,
+}
+
+impl VersionScore {
+    /// Lower mean first, exactly.
+    fn rank_order(&self, other: &VersionScore) -> std::cmp::Ordering {
+        self.mean.cmp(&other.mean)
+    }
 }
 
 /// Each entrant's best version (lowest mean score, then highest finish rate, then the
-/// lower version id), best entrant first, with its rank (equal numbers share a rank).
+/// lower version id), best entrant first, with its rank: entrants whose means are equal
+/// (exactly: [`Mean`]) share a rank, as on the boards, and are listed by id.
 pub fn rank_entrants(scores: &[VersionScore]) -> Vec<(i64, VersionScore)> {
     let better = |a: &VersionScore, b: &VersionScore| {
-        a.mean_score
-            .total_cmp(&b.mean_score)
-            .then(b.finish_rate.total_cmp(&a.finish_rate))
+        // finished / played, higher first, compared as fractions.
+        let rate = |v: &VersionScore| (i128::from(v.finished), i128::from(v.played.max(1)));
+        let ((fa, pa), (fb, pb)) = (rate(a), rate(b));
+        a.rank_order(b).then((fb * pa).cmp(&(fa * pb)))
     };
     let mut best: Vec<VersionScore> = Vec::new();
     for s in scores {
@@ -137,8 +145,8 @@ pub fn rank_entrants(scores: &[VersionScore]) -> Vec<(i64, VersionScore)> {
             None => best.push(s.clone()),
         }
     }
-    best.sort_by(|a, b| better(a, b).then(a.entrant_id.cmp(&b.entrant_id)));
-    let ranks = shared_ranks(&best, |a, b| better(a, b).is_eq());
+    best.sort_by(|a, b| a.rank_order(b).then(a.entrant_id.cmp(&b.entrant_id)));
+    let ranks = shared_ranks(&best, |a, b| a.rank_order(b).is_eq());
     ranks.into_iter().zip(best).collect()
 }
 
@@ -150,7 +158,7 @@ mod tests {
         Candidate {
             bot_version_id: id * 10,
             version: id,
-            public_mean: mean,
+            public_mean: mean.map(|m| Mean::of_scores([m])),
             chosen,
         }
     }
@@ -181,25 +189,34 @@ mod tests {
 
     #[test]
     fn entrants_rank_by_their_best_version_and_ties_share_a_rank() {
-        let s = |entrant_id, bot_version_id, mean_score, finish_rate| VersionScore {
+        let s = |entrant_id, bot_version_id, scores: &[f64]| VersionScore {
             entrant_id,
             bot_version_id,
-            played: 4,
-            finished: 4,
-            mean_score,
-            finish_rate,
+            played: scores.len() as i64,
+            finished: scores.iter().filter(|&&x| x < 1000.0).count() as i64,
+            mean: Mean::of_scores(scores.iter().copied()),
         };
+        // Entrants 5 and 6: the same scores (whole thirtieths) in another order, whose
+        // float means are 23.7 and 23.699999999999996. Entrant 1's better version counts.
+        let twin = [19.0 + 17.0 / 30.0, 34.4, 17.0 + 4.0 / 30.0, 23.7];
         let ranked = rank_entrants(&[
-            s(1, 11, 40.0, 1.0),
-            s(1, 12, 30.0, 1.0),
-            s(2, 21, 30.0, 1.0),
-            s(3, 31, 30.0, 0.5),
-            s(4, 41, 10.0, 1.0),
+            s(1, 11, &[40.0; 4]),
+            s(1, 12, &[30.0; 4]),
+            s(2, 21, &[30.0; 4]),
+            s(4, 41, &[10.0; 4]),
+            s(5, 51, &twin),
+            s(6, 61, &[twin[3], twin[1], twin[2], twin[0]]),
         ]);
         let got: Vec<(i64, i64, i64)> = ranked
             .iter()
             .map(|(r, v)| (*r, v.entrant_id, v.bot_version_id))
             .collect();
-        assert_eq!(got, vec![(1, 4, 41), (2, 1, 12), (2, 2, 21), (4, 3, 31)]);
+        assert_eq!(
+            got,
+            vec![(1, 4, 41), (2, 5, 51), (2, 6, 61), (4, 1, 12), (4, 2, 21)]
+        );
+        // Equal means share a rank whatever the finish rates (1000 + 20 and 510 + 510).
+        let ranked = rank_entrants(&[s(7, 71, &[1000.0, 20.0]), s(8, 81, &[510.0, 510.0])]);
+        assert_eq!((ranked[0].0, ranked[1].0), (1, 1));
     }
 }

@@ -3,8 +3,10 @@
 //! whose difference is not significant.
 //!
 //! The rules, the same on every surface (API, pages, `tournament` table, CSV):
-//! - **Order and rank.** Lower mean score first. Bots whose mean scores are equal (to
-//!   one part in 10^9) share a rank, as in 1, 1, 3, and are listed by name.
+//! - **Order and rank.** Lower mean score first. Means are exact ([`Mean`]: sums of
+//!   scores in whole thirtieths of a step), so bots whose mean scores are equal share
+//!   a rank, as in 1, 1, 3, and are listed by name, however their scores were added
+//!   up. Means and interval ends are shown rounded to 3 decimals.
 //! - **Interval.** The 95% percentile interval of the mean from a bootstrap that keeps
 //!   the mazes and resamples each maze's runs (one per seed), with a fixed seed
 //!   ([`bootstrap`]). It measures the luck of the seeds: a bot that scores the same on
@@ -27,8 +29,10 @@
 //!   its rank range its rank, and it shares a tie group only with equal means.
 
 pub mod bootstrap;
+pub mod mean;
 
 use bootstrap::Cells;
+pub use mean::{Mean, same_mean};
 
 /// One match of a bot: its maze, its seed and its score (a did-not-finish as 1000).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,15 +75,10 @@ pub struct Uncertainty {
 /// A bot to rank: its mean score (as the standings show it) and its matches.
 #[derive(Debug, Clone, Copy)]
 pub struct Entry<'a> {
-    /// Mean score.
-    pub mean: f64,
+    /// Mean score, exact.
+    pub mean: Mean,
     /// Its matches.
     pub samples: &'a [Sample],
-}
-
-/// Whether two mean scores count as equal.
-pub fn same_score(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
 }
 
 /// Ranks `entries`, given best first (ascending mean): each one's rank (shared by equal
@@ -90,15 +89,19 @@ pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
         .iter()
         .zip(&cells)
         .map(|(e, c)| {
+            let mean = e.mean.rounded();
             if c.is_empty() {
-                (e.mean, e.mean)
+                (mean, mean)
             } else {
                 let (low, high) = c.interval();
                 if low == high {
                     // No spread: the mean itself (as the standings add it up).
-                    (e.mean, e.mean)
+                    (mean, mean)
                 } else {
-                    (low.min(e.mean), high.max(e.mean))
+                    (
+                        mean::round_3dp(low).min(mean),
+                        mean::round_3dp(high).max(mean),
+                    )
                 }
             }
         })
@@ -109,17 +112,17 @@ pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
     for (i, e) in entries.iter().enumerate() {
         let rank = 1 + entries
             .iter()
-            .filter(|o| o.mean < e.mean && !same_score(o.mean, e.mean))
+            .filter(|o| o.mean < e.mean)
             .count() as i64;
         let (low, high) = intervals[i];
         let best = 1 + intervals.iter().filter(|(_, h)| *h < low).count() as i64;
         let worst = 1 + entries
             .iter()
             .zip(&intervals)
-            .filter(|(o, (l, _))| *l < high && !same_score(o.mean, e.mean))
+            .filter(|(o, (l, _))| *l < high && o.mean != e.mean)
             .count() as i64;
         let joins = i > 0
-            && (same_score(entries[i - 1].mean, e.mean)
+            && (same_mean(entries[i - 1].mean, e.mean)
                 || !differ(&cells[leader], &cells[i], intervals[leader], intervals[i]));
         if !joins {
             group += 1;
@@ -157,17 +160,17 @@ pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
 /// The uncertainty shown for lines, given best first as (rank, mean), whose matches
 /// must not be told apart: nothing but what the means say. The interval is the mean,
 /// the rank range the rank, and lines share a tie group only when their means are equal
-/// ([`same_score`]).
-pub fn withheld(lines: &[(i64, f64)]) -> Vec<Uncertainty> {
+/// ([`same_mean`]).
+pub fn withheld(lines: &[(i64, Mean)]) -> Vec<Uncertainty> {
     let mut out: Vec<Uncertainty> = Vec::with_capacity(lines.len());
     let mut group = 0;
     for (i, &(rank, mean)) in lines.iter().enumerate() {
-        if i == 0 || !same_score(lines[i - 1].1, mean) {
+        if i == 0 || !same_mean(lines[i - 1].1, mean) {
             group += 1;
         }
         out.push(Uncertainty {
-            low: mean,
-            high: mean,
+            low: mean.rounded(),
+            high: mean.rounded(),
             rank_best: rank,
             rank_worst: rank,
             rank_range: rank.to_string(),
@@ -228,18 +231,29 @@ mod tests {
             let m = mean(&samples);
             let shown = withheld(&[(1, m)]);
             let u = &shown[0];
-            assert_eq!((u.low, u.high, u.rank_best, u.rank_worst), (m, m, 1, 1));
+            let shown_mean = m.rounded();
+            assert_eq!(
+                (u.low, u.high, u.rank_best, u.rank_worst),
+                (shown_mean, shown_mean, 1, 1)
+            );
             assert_eq!((u.runs_per_maze, u.tied, u.withheld), (0, false, true));
             // Another set of matches with the same mean shows the same line.
             let other = withheld(&[(1, m)]);
             assert_eq!(&other[0], u);
-            for s in scores.iter().filter(|&&s| !same_score(s, m)) {
+            for s in scores.iter().filter(|&&s| Mean::of_scores([s]) != m) {
                 for n in [u.low, u.high] {
-                    assert!(!same_score(n, *s), "{scores:?}: {n} shows a match");
+                    assert!(
+                        Mean::of_scores([n]) != Mean::of_scores([*s]),
+                        "{scores:?}: {n} shows a match"
+                    );
                 }
             }
         }
-        let table = withheld(&[(1, 20.0), (1, 20.0), (3, 25.0)]);
+        let table = withheld(&[
+            (1, Mean::new(1200, 2)),
+            (1, Mean::new(600, 1)),
+            (3, Mean::new(750, 1)),
+        ]);
         assert_eq!(
             table
                 .iter()
@@ -263,8 +277,8 @@ mod tests {
         out
     }
 
-    fn mean(s: &[Sample]) -> f64 {
-        s.iter().map(|x| x.score).sum::<f64>() / s.len() as f64
+    fn mean(s: &[Sample]) -> Mean {
+        Mean::of_scores(s.iter().map(|x| x.score))
     }
 
     fn table(bots: &[Vec<Sample>]) -> Vec<(i64, Uncertainty)> {
@@ -369,7 +383,7 @@ mod tests {
             })
             .collect();
         let mut sorted = bots.clone();
-        sorted.sort_by(|x, y| mean(x).total_cmp(&mean(y)));
+        sorted.sort_by(|x, y| mean(x).cmp(&mean(y)));
         assert_eq!(table(&sorted), table(&sorted));
     }
 }

@@ -19,6 +19,8 @@ use crate::storage::Storage;
 use crate::storage::bots::VersionQuota;
 use crate::storage::competitions::{BoardRow, CompetitionMaze, CompetitionRow, ResultRow};
 use crate::storage::leaderboard::Scope;
+use crate::ranking::Mean;
+use crate::ranking::mean::ratio_3dp;
 use crate::storage::matches::PracticeQuota;
 
 /// Seeds drawn for every competition: enough for the most ranking and final repeats.
@@ -512,12 +514,40 @@ pub struct BoardLine {
     pub played: i64,
     /// Of which finished.
     pub finished: i64,
-    /// Mean score, a did-not-finish counting as 1000.
+    /// Mean score, a did-not-finish counting as 1000, rounded to 3 decimals (ranks and
+    /// ties come from the exact sum, `score_sum30`).
     pub mean_score: f64,
-    /// finished / played.
+    /// Sum of the scores in thirtieths of a step (a did-not-finish: 30,000): the exact
+    /// mean is `score_sum30 / (30 x played)`.
+    pub score_sum30: i64,
+    /// finished / played, rounded to 3 decimals.
     pub finish_rate: f64,
     /// How sure the rank is ([`crate::ranking`]).
     pub uncertainty: crate::ranking::Uncertainty,
+}
+
+impl BoardLine {
+    /// A version's line from its board row, not yet ranked (rank 0).
+    pub fn from_row(r: &BoardRow) -> BoardLine {
+        BoardLine {
+            rank: 0,
+            entrant: r.entrant_name.clone().unwrap_or_default(),
+            bot_id: r.bot_id,
+            bot_name: r.bot_name.clone(),
+            version: r.version,
+            played: r.played,
+            finished: r.finished,
+            mean_score: r.mean().rounded(),
+            score_sum30: r.score_sum30,
+            finish_rate: ratio_3dp(r.finished, r.played),
+            uncertainty: Default::default(),
+        }
+    }
+
+    /// The exact mean score.
+    pub fn mean(&self) -> Mean {
+        Mean::new(self.score_sum30, self.played)
+    }
 }
 
 /// A board as some caller may see it.
@@ -618,7 +648,7 @@ pub async fn board(
     match (tournament, standings.is_empty()) {
         (Some(_), false) if !organiser && !revealed => rankings::rank_lines_withheld(
             &mut standings,
-            |l| l.mean_score,
+            BoardLine::mean,
             |l| l.bot_name.as_str(),
             set,
         ),
@@ -627,7 +657,7 @@ pub async fn board(
             rankings::rank_lines(
                 &mut standings,
                 &samples,
-                |l| l.mean_score,
+                BoardLine::mean,
                 |l| l.bot_name.as_str(),
                 |l| (l.bot_id, l.version),
                 set,
@@ -654,21 +684,7 @@ fn latest_per_bot(rows: impl Iterator<Item = BoardRow>) -> Vec<BoardLine> {
             None => latest.push(r),
         }
     }
-    latest
-        .into_iter()
-        .map(|r| BoardLine {
-            rank: 0,
-            entrant: r.entrant_name.unwrap_or_default(),
-            bot_id: r.bot_id,
-            bot_name: r.bot_name,
-            version: r.version,
-            played: r.played,
-            finished: r.finished,
-            mean_score: r.mean_score,
-            finish_rate: r.finish_rate,
-            uncertainty: Default::default(),
-        })
-        .collect()
+    latest.iter().map(BoardLine::from_row).collect()
 }
 
 /// The stored results of `c`, best first, each with how sure its rank is (from the
@@ -687,7 +703,7 @@ pub async fn results(storage: &Storage, c: &CompetitionRow) -> Result<Vec<Result
             rankings::rank_lines(
                 &mut rows,
                 &samples,
-                |r| r.mean_score,
+                ResultRow::mean,
                 |r| r.entrant_name.as_str(),
                 |r| (r.bot_id, r.version),
                 |r, _, u| r.uncertainty = u,
@@ -702,7 +718,7 @@ pub async fn results(storage: &Storage, c: &CompetitionRow) -> Result<Vec<Result
             rankings::withhold_lines(
                 &mut rows,
                 |r| r.rank,
-                |r| r.mean_score,
+                ResultRow::mean,
                 |r, u| r.uncertainty = u,
             );
         }
@@ -818,7 +834,7 @@ async fn final_selection(storage: &Storage, c: &CompetitionRow) -> Result<Vec<i6
                 public_mean: public
                     .iter()
                     .find(|r| r.bot_version_id == s.bot_version_id)
-                    .map(|r| r.mean_score),
+                    .map(BoardRow::mean),
                 chosen: s.chosen,
             })
             .collect();
@@ -861,8 +877,7 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
                 bot_version_id: r.bot_version_id,
                 played: r.played,
                 finished: r.finished,
-                mean_score: r.mean_score,
-                finish_rate: r.finish_rate,
+                mean: r.mean(),
             })
         })
         .collect();
@@ -905,7 +920,7 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
         let equal = recount.is_some_and(|r| {
             r.played == row.played
                 && r.finished == row.finished
-                && (r.mean_score - row.mean_score).abs() < 1e-9
+                && r.score_sum30 == row.score_sum30
         });
         if !equal {
             tracing::error!(competition = %c.name, version = s.bot_version_id,
@@ -950,7 +965,8 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
                 "equal": equal,
                 "played": recount.map(|r| r.played),
                 "finished": recount.map(|r| r.finished),
-                "mean_score": recount.map(|r| r.mean_score),
+                "mean_score": recount.map(|r| r.mean().rounded()),
+                "score_sum30": recount.map(|r| r.score_sum30),
             },
             "matches": played,
             "replay": replay,
@@ -965,8 +981,9 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             version: row.version,
             played: row.played,
             finished: row.finished,
-            mean_score: row.mean_score,
-            finish_rate: row.finish_rate,
+            mean_score: row.mean().rounded(),
+            score_sum30: row.score_sum30,
+            finish_rate: ratio_3dp(row.finished, row.played),
             manifest: manifest.to_string(),
             uncertainty: Default::default(),
         });
@@ -1042,7 +1059,7 @@ pub async fn recount_differences(storage: &Storage, c: &CompetitionRow) -> Resul
             .is_some_and(|x| {
                 x.played == r.played
                     && x.finished == r.finished
-                    && (x.mean_score - r.mean_score).abs() < 1e-9
+                    && x.score_sum30 == r.score_sum30
             });
         if !same {
             differ.push(format!("{} (version {})", r.entrant_name, r.version));
@@ -1068,7 +1085,7 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
         }
     };
     let mut out = String::from(
-        "rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high,finish_rate,bundle_sha256\n",
+        "rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high,finish_rate,score_sum30,bundle_sha256\n",
     );
     for r in rows {
         let bundle = serde_json::from_str::<serde_json::Value>(&r.manifest)
@@ -1076,7 +1093,7 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
             .and_then(|m| m["bundle_sha256"].as_str().map(str::to_string))
             .unwrap_or_default();
         out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{},{}\n",
             r.rank,
             r.uncertainty.rank_range,
             r.uncertainty.tie_group,
@@ -1085,10 +1102,11 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
             r.version,
             r.played,
             r.finished,
-            r.mean_score,
+            r.mean(),
             r.uncertainty.low,
             r.uncertainty.high,
             r.finish_rate,
+            r.score_sum30,
             bundle
         ));
     }
@@ -1188,6 +1206,7 @@ mod tests {
             played: 4,
             finished: 3,
             mean_score: 260.5,
+            score_sum30: 31260,
             finish_rate: 0.75,
             manifest: r#"{"bundle_sha256":"abc"}"#.into(),
             uncertainty: crate::ranking::Uncertainty {
@@ -1202,13 +1221,16 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(
             lines[0],
-            "rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high,finish_rate,bundle_sha256"
+            "rank,rank_range,tie_group,entrant,bot,version,played,finished,mean_score,score_low,score_high,finish_rate,score_sum30,bundle_sha256"
         );
         assert_eq!(
             lines[1],
-            r#"1,1-2,1,"team, ""a""",'=cmd|' /c calc'!A1,2,4,3,260.5,250,270,0.75,abc"#
+            r#"1,1-2,1,"team, ""a""",'=cmd|' /c calc'!A1,2,4,3,260.500,250.000,270.000,0.750,31260,abc"#
         );
-        assert_eq!(lines[2], "1,1-2,1,b,'@sum,2,4,3,260.5,250,270,0.75,abc");
+        assert_eq!(
+            lines[2],
+            "1,1-2,1,b,'@sum,2,4,3,260.500,250.000,270.000,0.750,31260,abc"
+        );
     }
 
     /// The close is one instant: a version whose upload passed every check before the

@@ -10,19 +10,13 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use crate::ranking::{self, Entry, Sample, Uncertainty};
+use crate::ranking::{self, Entry, Mean, Sample, Uncertainty};
 use crate::storage::leaderboard::{Scope, Standing};
 use crate::storage::{Result, Storage};
 
-/// Puts `lines` best first: lower mean first, equal means by name.
-pub fn order_lines<T>(lines: &mut [T], mean: impl Fn(&T) -> f64, name: impl Fn(&T) -> &str) {
-    lines.sort_by(|a, b| {
-        if ranking::same_score(mean(a), mean(b)) {
-            name(a).cmp(name(b))
-        } else {
-            mean(a).total_cmp(&mean(b))
-        }
-    });
+/// Puts `lines` best first: lower mean first (exactly, [`Mean`]), equal means by name.
+pub fn order_lines<T>(lines: &mut [T], mean: impl Fn(&T) -> Mean, name: impl Fn(&T) -> &str) {
+    lines.sort_by(|a, b| mean(a).cmp(&mean(b)).then_with(|| name(a).cmp(name(b))));
 }
 
 /// Ranks `lines` (any order) by mean score with [`ranking::assess`]: puts them best
@@ -31,7 +25,7 @@ pub fn order_lines<T>(lines: &mut [T], mean: impl Fn(&T) -> f64, name: impl Fn(&
 pub fn rank_lines<T>(
     lines: &mut [T],
     samples: &[(i64, i64, Sample)],
-    mean: impl Fn(&T) -> f64,
+    mean: impl Fn(&T) -> Mean,
     name: impl Fn(&T) -> &str,
     key: impl Fn(&T) -> (i64, i64),
     mut set: impl FnMut(&mut T, i64, Uncertainty),
@@ -60,10 +54,10 @@ pub fn rank_lines<T>(
 pub fn withhold_lines<T>(
     lines: &mut [T],
     rank: impl Fn(&T) -> i64,
-    mean: impl Fn(&T) -> f64,
+    mean: impl Fn(&T) -> Mean,
     mut set: impl FnMut(&mut T, Uncertainty),
 ) {
-    let shown: Vec<(i64, f64)> = lines.iter().map(|l| (rank(l), mean(l))).collect();
+    let shown: Vec<(i64, Mean)> = lines.iter().map(|l| (rank(l), mean(l))).collect();
     for (line, u) in lines.iter_mut().zip(ranking::withheld(&shown)) {
         set(line, u);
     }
@@ -74,19 +68,16 @@ pub fn withhold_lines<T>(
 /// nothing of it would be shown.
 pub fn rank_lines_withheld<T>(
     lines: &mut [T],
-    mean: impl Fn(&T) -> f64,
+    mean: impl Fn(&T) -> Mean,
     name: impl Fn(&T) -> &str,
     mut set: impl FnMut(&mut T, i64, Uncertainty),
 ) {
     order_lines(lines, &mean, &name);
-    let means: Vec<f64> = lines.iter().map(&mean).collect();
-    let shown: Vec<(i64, f64)> = means
+    let means: Vec<Mean> = lines.iter().map(&mean).collect();
+    let shown: Vec<(i64, Mean)> = means
         .iter()
         .map(|&m| {
-            let better = means
-                .iter()
-                .filter(|&&o| o < m && !ranking::same_score(o, m))
-                .count();
+            let better = means.iter().filter(|&&o| o < m).count();
             (1 + better as i64, m)
         })
         .collect();
@@ -95,8 +86,8 @@ pub fn rank_lines_withheld<T>(
     }
 }
 
-/// A standing's own numbers, best first: (bot, version, played, finished, mean's bits).
-type Key = (Scope, Vec<(i64, i64, i64, i64, u64)>);
+/// A standing's own numbers, best first: (bot, version, played, finished, sum of scores).
+type Key = (Scope, Vec<(i64, i64, i64, i64, i64)>);
 
 /// A table: each line's rank and uncertainty, in the standing's order.
 type Table = Arc<Vec<(i64, Uncertainty)>>;
@@ -136,7 +127,7 @@ impl Ranker {
         if rows.is_empty() {
             return Ok(rows);
         }
-        order_lines(&mut rows, |r| r.mean_score, |r| r.name.as_str());
+        order_lines(&mut rows, Standing::mean, |r| r.name.as_str());
         let key: Key = (
             scope,
             rows.iter()
@@ -146,7 +137,7 @@ impl Ranker {
                         r.version,
                         r.played,
                         r.finished,
-                        r.mean_score.to_bits(),
+                        r.score_sum30,
                     )
                 })
                 .collect(),
@@ -161,7 +152,7 @@ impl Ranker {
                         let samples = storage.standing_samples(scope).await?;
                         struct Line {
                             at: usize,
-                            mean: f64,
+                            mean: Mean,
                             name: String,
                             key: (i64, i64),
                             rank: i64,
@@ -172,7 +163,7 @@ impl Ranker {
                             .enumerate()
                             .map(|(at, r)| Line {
                                 at,
-                                mean: r.mean_score,
+                                mean: r.mean(),
                                 name: r.name.clone(),
                                 key: (r.bot_id, r.version),
                                 rank: 0,
@@ -271,7 +262,13 @@ mod tests {
 
     #[test]
     fn lines_are_ordered_by_mean_then_by_name_when_means_are_equal() {
-        let mut lines = vec![(3.0, "b"), (1.0, "z"), (3.0 + 1e-13, "a"), (2.0, "c")];
+        // 3 over 1 match and 6 over 2 are the same mean: equal, so by name.
+        let mut lines = vec![
+            (Mean::new(90, 1), "b"),
+            (Mean::new(30, 1), "z"),
+            (Mean::new(180, 2), "a"),
+            (Mean::new(60, 1), "c"),
+        ];
         order_lines(&mut lines, |l| l.0, |l| l.1);
         let names: Vec<&str> = lines.iter().map(|l| l.1).collect();
         assert_eq!(names, vec!["z", "c", "a", "b"]);

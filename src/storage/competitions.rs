@@ -163,10 +163,8 @@ pub struct BoardRow {
     pub played: i64,
     /// Of which finished.
     pub finished: i64,
-    /// Mean score, a did-not-finish counting as 1000.
-    pub mean_score: f64,
-    /// finished / played.
-    pub finish_rate: f64,
+    /// Sum of the scores in thirtieths of a step (a did-not-finish: 30,000).
+    pub score_sum30: i64,
     /// Whether some of its matches there are still queued or running.
     #[sqlx(try_from = "super::Flag")]
     pub pending: bool,
@@ -220,9 +218,15 @@ pub struct ResultRow {
     pub played: i64,
     /// Of which finished.
     pub finished: i64,
-    /// Mean score, a did-not-finish counting as 1000.
+    /// Mean score, a did-not-finish counting as 1000, rounded to 3 decimals (the rank
+    /// comes from the exact sum, `score_sum30`).
+    #[sqlx(skip)]
     pub mean_score: f64,
-    /// finished / played.
+    /// Sum of the scores in thirtieths of a step (a did-not-finish: 30,000): the exact
+    /// mean is `score_sum30 / (30 x played)`.
+    pub score_sum30: i64,
+    /// finished / played, rounded to 3 decimals.
+    #[sqlx(skip)]
     pub finish_rate: f64,
     /// What makes the row checkable and replayable (JSON): the version's bundle hash, the
     /// referee version, the mazes' hashes, the seeds, the limits, the recount.
@@ -231,6 +235,27 @@ pub struct ResultRow {
     /// [`crate::registry::competitions::results`]).
     #[sqlx(skip)]
     pub uncertainty: crate::ranking::Uncertainty,
+}
+
+impl BoardRow {
+    /// The exact mean score.
+    pub fn mean(&self) -> crate::ranking::Mean {
+        crate::ranking::Mean::new(self.score_sum30, self.played)
+    }
+}
+
+impl ResultRow {
+    /// The exact mean score.
+    pub fn mean(&self) -> crate::ranking::Mean {
+        crate::ranking::Mean::new(self.score_sum30, self.played)
+    }
+
+    /// Sets the shown numbers from the exact ones: the mean and the finish rate,
+    /// rounded to 3 decimals.
+    pub fn fill_shown(&mut self) {
+        self.mean_score = self.mean().rounded();
+        self.finish_rate = crate::ranking::mean::ratio_3dp(self.finished, self.played);
+    }
 }
 
 /// The practice matches of entrant `$2` on competition `$1`'s practice mazes queued
@@ -838,14 +863,15 @@ impl Storage {
             format!(
                 "select m.bot_version_id, count(*) as played,
                      sum(case when m.status = 'finished' then 1 else 0 end) as finished,
-                     sum(case when m.status = 'finished' then m.score else {dnf:.1} end) as score_sum
+                     sum(case when m.status = 'finished' then cast(round(m.score * 30) as bigint)
+                         else {dnf} end) as score_sum30
                  from match m where m.tournament_id = $1 and m.status not in ('queued', 'running')
                  group by m.bot_version_id",
-                dnf = crate::engine::score::DNF_SCORE
+                dnf = crate::ranking::mean::DNF_THIRTIETHS
             )
         } else {
             "select bot_version_id, sum(played) as played, sum(finished) as finished,
-                 sum(score_sum) as score_sum
+                 sum(score_sum30) as score_sum30
              from standing where tournament_id = $1 group by bot_version_id"
                 .to_string()
         };
@@ -853,8 +879,7 @@ impl Storage {
             "select v.bot_version_id, v.bot_id, b.name as bot_name, b.entrant_id, n.name as entrant_name,
                  v.version, v.created_at, cast(s.played as bigint) as played,
                  cast(s.finished as bigint) as finished,
-                 cast(s.score_sum / s.played as double precision) as mean_score,
-                 cast(1.0 * s.finished / s.played as double precision) as finish_rate,
+                 cast(s.score_sum30 as bigint) as score_sum30,
                  case when exists (select 1 from match p where p.tournament_id = $1
                      and p.bot_version_id = v.bot_version_id and p.status in ('queued', 'running'))
                      then 1 else 0 end as pending
@@ -863,7 +888,8 @@ impl Storage {
              join bot b on b.bot_id = v.bot_id
              left join entrant n on n.entrant_id = b.entrant_id
              where s.played > 0
-             order by mean_score asc, finish_rate desc, b.name asc, v.version desc"
+             order by 1.0 * s.score_sum30 / s.played asc, 1.0 * s.finished / s.played desc,
+                 b.name asc, v.version desc"
         ))
         .bind(tournament_id)
         .fetch_all(self.pool())
@@ -1075,8 +1101,9 @@ impl Storage {
         for r in rows {
             sqlx::query(
                 "insert into competition_result (competition_id, rank, entrant_id, entrant_name, bot_id,
-                     bot_name, bot_version_id, version, played, finished, mean_score, finish_rate, manifest)
-                 values ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13)",
+                     bot_name, bot_version_id, version, played, finished, mean_score, finish_rate, manifest,
+                     score_sum30)
+                 values ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14)",
             )
             .bind(c.competition_id)
             .bind(r.rank)
@@ -1091,6 +1118,7 @@ impl Storage {
             .bind(r.mean_score)
             .bind(r.finish_rate)
             .bind(&r.manifest)
+            .bind(r.score_sum30)
             .execute(&mut *tx)
             .await?;
         }
@@ -1113,14 +1141,18 @@ impl Storage {
     /// # Errors
     /// Database failures.
     pub async fn competition_results(&self, competition_id: i64) -> Result<Vec<ResultRow>> {
-        Ok(sqlx::query_as(
+        let mut rows: Vec<ResultRow> = sqlx::query_as(
             "select rank, entrant_id, entrant_name, bot_id, bot_name, bot_version_id, version, played,
-                 finished, mean_score, finish_rate, manifest
+                 finished, score_sum30, manifest
              from competition_result where competition_id = $1 order by rank, entrant_name",
         )
         .bind(competition_id)
         .fetch_all(self.pool())
-        .await?)
+        .await?;
+        for r in &mut rows {
+            r.fill_shown();
+        }
+        Ok(rows)
     }
 
     /// How far tournament `tournament_id` has played: (matches played, matches in it).

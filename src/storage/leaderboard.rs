@@ -5,7 +5,15 @@ use sqlx::FromRow;
 
 use super::{Result, Storage};
 use crate::engine::score::DNF_SCORE;
-use crate::ranking::{Sample, Uncertainty};
+use crate::ranking::mean::{DNF_THIRTIETHS, ratio_3dp};
+use crate::ranking::{Mean, Sample, Uncertainty};
+
+impl Standing {
+    /// The exact mean score.
+    pub fn mean(&self) -> Mean {
+        Mean::new(self.score_sum30, self.played)
+    }
+}
 
 /// Which matches a leaderboard counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,9 +43,15 @@ pub struct Standing {
     pub played: i64,
     /// Matches finished.
     pub finished: i64,
-    /// Mean score, a did-not-finish counting as 1000.
+    /// Mean score, a did-not-finish counting as 1000, rounded to 3 decimals (ranks and
+    /// ties come from the exact sum, `score_sum30`).
+    #[sqlx(skip)]
     pub mean_score: f64,
-    /// finished / played.
+    /// Sum of the scores in thirtieths of a step (a did-not-finish: 30,000): the exact
+    /// mean is `score_sum30 / (30 x played)`.
+    pub score_sum30: i64,
+    /// finished / played, rounded to 3 decimals.
+    #[sqlx(skip)]
     pub finish_rate: f64,
     /// Mean of score / optimum (over mazes with a known optimum). The API leaves it out
     /// for non-admins when `hidden_played > 0`: over one hidden maze it gives the
@@ -94,8 +108,7 @@ impl Storage {
         let sql = format!(
             "select b.bot_id, b.name, v.version, cast(sum(s.played) as bigint) as played,
                  cast(sum(s.finished) as bigint) as finished,
-                 cast(sum(s.score_sum) / sum(s.played) as double precision) as mean_score,
-                 cast(1.0 * sum(s.finished) / sum(s.played) as double precision) as finish_rate,
+                 cast(sum(s.score_sum30) as bigint) as score_sum30,
                  cast(case when sum(s.ratio_count) > 0 then sum(s.ratio_sum) / sum(s.ratio_count) end
                       as double precision) as mean_ratio,
                  cast(sum(s.played * s.hidden) as bigint) as hidden_played
@@ -105,7 +118,8 @@ impl Storage {
                    from bot) b on b.bot_id = v.bot_id
              where s.played > 0 and {filter}
              group by v.bot_version_id, b.bot_id, b.name, v.version
-             order by mean_score asc, finish_rate desc, b.name asc"
+             order by 1.0 * sum(s.score_sum30) / sum(s.played) asc,
+                 1.0 * sum(s.finished) / sum(s.played) desc, b.name asc"
         );
         self.standings(&sql, scope).await
     }
@@ -122,10 +136,8 @@ impl Storage {
         let sql = format!(
             "select b.bot_id, b.name, v.version, count(*) as played,
                  cast(sum(case when m.status = 'finished' then 1 else 0 end) as bigint) as finished,
-                 cast(avg(case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end)
-                      as double precision) as mean_score,
-                 cast(avg(case when m.status = 'finished' then 1.0 else 0.0 end)
-                      as double precision) as finish_rate,
+                 cast(sum(case when m.status = 'finished' then cast(round(m.score * 30) as bigint)
+                          else {DNF_THIRTIETHS} end) as bigint) as score_sum30,
                  cast(avg((case when m.status = 'finished' then m.score else {DNF_SCORE:.1} end) / z.optimum)
                       as double precision) as mean_ratio,
                  cast(sum(z.hidden) as bigint) as hidden_played
@@ -135,7 +147,9 @@ impl Storage {
              join maze z on z.maze_id = m.maze_id
              where m.status not in ('queued', 'running') and {filter}
              group by v.bot_version_id, b.bot_id, b.name, v.version
-             order by mean_score asc, finish_rate desc, b.name asc"
+             order by 1.0 * sum(case when m.status = 'finished' then cast(round(m.score * 30) as bigint)
+                          else {DNF_THIRTIETHS} end) / count(*) asc,
+                 1.0 * sum(case when m.status = 'finished' then 1 else 0 end) / count(*) desc, b.name asc"
         );
         self.standings(&sql, scope).await
     }
@@ -176,6 +190,8 @@ impl Storage {
             .await?;
         for (i, row) in rows.iter_mut().enumerate() {
             row.rank = i as i64 + 1;
+            row.mean_score = row.mean().rounded();
+            row.finish_rate = ratio_3dp(row.finished, row.played);
         }
         Ok(rows)
     }
@@ -232,8 +248,9 @@ mod tests {
                 (k.bot_id, k.played, k.finished),
                 (c.bot_id, c.played, c.finished)
             );
-            assert!((k.mean_score - c.mean_score).abs() < 1e-9, "{k:?} {c:?}");
-            assert!((k.finish_rate - c.finish_rate).abs() < 1e-9, "{k:?} {c:?}");
+            assert_eq!(k.score_sum30, c.score_sum30, "{k:?} {c:?}");
+            assert_eq!(k.mean_score.to_bits(), c.mean_score.to_bits(), "{k:?} {c:?}");
+            assert_eq!(k.finish_rate.to_bits(), c.finish_rate.to_bits(), "{k:?} {c:?}");
             assert_eq!(k.mean_ratio.is_some(), c.mean_ratio.is_some());
         }
         kept

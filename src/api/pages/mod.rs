@@ -317,7 +317,7 @@ async fn tournament_page(
             MatchState::Ended(MatchStatus::Finished) => {
                 c.played += 1;
                 c.finished += 1;
-                c.score_sum += row.score.unwrap_or(0.0);
+                c.score_sum30 += crate::ranking::mean::thirtieths(row.score.unwrap_or(0.0));
                 c.link.get_or_insert(row.match_id);
             }
             _ => {

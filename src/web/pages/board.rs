@@ -275,6 +275,7 @@ mod tests {
             played,
             finished: played,
             mean_score: rank as f64,
+            score_sum30: rank * 30 * played,
             finish_rate: 1.0 / rank as f64,
             mean_ratio: ratio,
             hidden_played: 0,

@@ -187,8 +187,8 @@ pub struct Cell {
     pub played: i64,
     /// Matches finished.
     pub finished: i64,
-    /// Sum of finished scores.
-    pub score_sum: f64,
+    /// Sum of finished scores, in thirtieths of a step.
+    pub score_sum30: i64,
     /// A match to link to (the first failed one if any, else the first).
     pub link: Option<i64>,
     /// Matches in all.
@@ -233,7 +233,7 @@ pub fn tournament(p: &TournamentPage) -> String {
                                 td.num { span.muted { "hidden" } }
                             } @else {
                             td.num {
-                                @if c.finished > 0 { (format!("{:.3}", c.score_sum / c.finished as f64)) } @else if c.played > 0 { "DNF" } @else { span.muted { "…" } }
+                                @if c.finished > 0 { (crate::ranking::Mean::new(c.score_sum30, c.finished)) } @else if c.played > 0 { "DNF" } @else { span.muted { "…" } }
                                 br;
                                 span.muted { (c.finished) "/" (c.total) }
                                 @if let Some(id) = c.link { " " a href={ "/matches/" (id) } { "#" (id) } }
