@@ -173,7 +173,8 @@ mod tests {
     fn score() -> impl Strategy<Value = f64> {
         prop_oneof![
             Just(DNF_SCORE),
-            (1u32..200, 0u32..1000).prop_map(|(run1, run0)| f64::from(run1) + f64::from(run0) / 30.0),
+            (1u32..200, 0u32..1000)
+                .prop_map(|(run1, run0)| f64::from(run1) + f64::from(run0) / 30.0),
         ]
     }
 

@@ -110,10 +110,7 @@ pub fn assess(entries: &[Entry]) -> Vec<(i64, Uncertainty)> {
     let mut group = 0i64;
     let mut leader = 0usize;
     for (i, e) in entries.iter().enumerate() {
-        let rank = 1 + entries
-            .iter()
-            .filter(|o| o.mean < e.mean)
-            .count() as i64;
+        let rank = 1 + entries.iter().filter(|o| o.mean < e.mean).count() as i64;
         let (low, high) = intervals[i];
         let best = 1 + intervals.iter().filter(|(_, h)| *h < low).count() as i64;
         let worst = 1 + entries

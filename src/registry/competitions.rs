@@ -15,12 +15,12 @@ use crate::competition::{
     DAY_MS, Limits, MazeSets, MazeText, Phase, Quota, Spec, Timeline, Timestamp,
 };
 use crate::engine::mazefile;
+use crate::ranking::Mean;
+use crate::ranking::mean::ratio_3dp;
 use crate::storage::Storage;
 use crate::storage::bots::VersionQuota;
 use crate::storage::competitions::{BoardRow, CompetitionMaze, CompetitionRow, ResultRow};
 use crate::storage::leaderboard::Scope;
-use crate::ranking::Mean;
-use crate::ranking::mean::ratio_3dp;
 use crate::storage::matches::PracticeQuota;
 
 /// Seeds drawn for every competition: enough for the most ranking and final repeats.
@@ -918,9 +918,7 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             .iter()
             .find(|r| r.bot_version_id == s.bot_version_id);
         let equal = recount.is_some_and(|r| {
-            r.played == row.played
-                && r.finished == row.finished
-                && r.score_sum30 == row.score_sum30
+            r.played == row.played && r.finished == row.finished && r.score_sum30 == row.score_sum30
         });
         if !equal {
             tracing::error!(competition = %c.name, version = s.bot_version_id,
@@ -1057,9 +1055,7 @@ pub async fn recount_differences(storage: &Storage, c: &CompetitionRow) -> Resul
             .iter()
             .find(|x| x.bot_version_id == r.bot_version_id)
             .is_some_and(|x| {
-                x.played == r.played
-                    && x.finished == r.finished
-                    && x.score_sum30 == r.score_sum30
+                x.played == r.played && x.finished == r.finished && x.score_sum30 == r.score_sum30
             });
         if !same {
             differ.push(format!("{} (version {})", r.entrant_name, r.version));

@@ -131,15 +131,7 @@ impl Ranker {
         let key: Key = (
             scope,
             rows.iter()
-                .map(|r| {
-                    (
-                        r.bot_id,
-                        r.version,
-                        r.played,
-                        r.finished,
-                        r.score_sum30,
-                    )
-                })
+                .map(|r| (r.bot_id, r.version, r.played, r.finished, r.score_sum30))
                 .collect(),
         );
         let table = match self.find(&key) {

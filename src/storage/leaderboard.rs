@@ -249,8 +249,16 @@ mod tests {
                 (c.bot_id, c.played, c.finished)
             );
             assert_eq!(k.score_sum30, c.score_sum30, "{k:?} {c:?}");
-            assert_eq!(k.mean_score.to_bits(), c.mean_score.to_bits(), "{k:?} {c:?}");
-            assert_eq!(k.finish_rate.to_bits(), c.finish_rate.to_bits(), "{k:?} {c:?}");
+            assert_eq!(
+                k.mean_score.to_bits(),
+                c.mean_score.to_bits(),
+                "{k:?} {c:?}"
+            );
+            assert_eq!(
+                k.finish_rate.to_bits(),
+                c.finish_rate.to_bits(),
+                "{k:?} {c:?}"
+            );
             assert_eq!(k.mean_ratio.is_some(), c.mean_ratio.is_some());
         }
         kept

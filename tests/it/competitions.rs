@@ -767,3 +767,203 @@ fn assert_interval(line: &Value, mean: &str) {
     );
     assert!(u["tie_group"].as_i64().unwrap() >= 1, "{line}");
 }
+
+/// Twins, the same program entered by three entrants and another by two, share a rank
+/// with equal printed means in the results' JSON, results.csv, the CLI's table and the
+/// competition's page: means are kept as exact sums of thirtieths, not as floats
+/// whose last bits depend on the order the matches were added up in.
+#[tokio::test]
+async fn twins_share_a_rank_and_print_equal_means_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (_, o) = server
+        .post(
+            "/api/organisers",
+            json!({"name": "twins-teacher"}),
+            Some(ADMIN),
+        )
+        .await;
+    let organiser = o["key"].as_str().unwrap().to_string();
+    let start = now_ms();
+    let spec = json!({
+        "name": "twins", "title": "Twins",
+        "opens_at": at(start), "closes_at": at(start + 3_600_000),
+        "repeats": 1, "final_repeats": 2,
+        "mazes": {
+            "public": [maze("twin-pub", 9102)],
+            "private": [maze("twin-a", 9103), maze("twin-b", 9104), maze("twin-c", 9105)],
+        },
+    });
+    let (s, c) = server
+        .post("/api/competitions", spec, Some(&organiser))
+        .await;
+    assert_eq!(s, 201, "{c}");
+    let read = |p: &str| std::fs::read_to_string(crate::support::root().join(p)).unwrap();
+    let smart = json!({
+        "mazebot.py": read("bots/python/mazebot.py"),
+        "mazemap.py": read("bots/python/mazemap.py"),
+        "seed000_smart_map.py": read("bots/python/seed000_smart_map.py"),
+    });
+    let programs = [
+        (
+            "python3 simple_bot.py",
+            simple_bot_files(),
+            ["s1", "s2", "s3"].as_slice(),
+        ),
+        (
+            "python3 seed000_smart_map.py",
+            smart,
+            ["m1", "m2"].as_slice(),
+        ),
+    ];
+    for (command, files, names) in &programs {
+        for name in names.iter() {
+            let (s, e) = server
+                .post("/api/entrants", json!({"name": name}), None)
+                .await;
+            assert_eq!(s, 201, "{e}");
+            let key = e["key"].as_str().unwrap().to_string();
+            let body = json!({"name": format!("{name}-bot"), "command": command, "files": files});
+            let (s, b) = server.post("/api/bots", body, Some(&key)).await;
+            assert_eq!(s, 201, "{b}");
+            let (s, v) = server
+                .post(
+                    "/api/competitions/twins/entries",
+                    json!({"bot_id": b["bot_id"]}),
+                    Some(&key),
+                )
+                .await;
+            assert_eq!(s, 201, "{v}");
+        }
+    }
+    // Every version ranked on the public set, then the close now and the final run.
+    wait_for(
+        &server,
+        "/api/competitions/twins/leaderboard",
+        Some(&organiser),
+        |v| v["standings"].as_array().is_some_and(|a| a.len() == 5),
+    )
+    .await;
+    let (s, v, _) = server
+        .call(
+            Method::PATCH,
+            "/api/competitions/twins",
+            Some(json!({"closes_at": at(now_ms())})),
+            Some(&organiser),
+        )
+        .await;
+    assert_eq!(s, 200, "{v}");
+    wait_for(&server, "/api/competitions/twins", None, |v| {
+        v["state"] == "final"
+    })
+    .await;
+
+    // The results' JSON: each program's entrants share one rank and one printed mean.
+    let (_, results) = server.get("/api/competitions/twins/results", None).await;
+    let rows = results["results"].as_array().unwrap();
+    assert_eq!(rows.len(), 5, "{results}");
+    let of = |prefix: &str| -> Vec<&Value> {
+        rows.iter()
+            .filter(|r| r["entrant_name"].as_str().unwrap().starts_with(prefix))
+            .collect()
+    };
+    let mut printed = Vec::new();
+    for (prefix, n) in [("s", 3), ("m", 2)] {
+        let twins = of(prefix);
+        assert_eq!(twins.len(), n, "{results}");
+        for t in &twins {
+            assert_eq!(t["rank"], twins[0]["rank"], "{results}");
+            assert_eq!(
+                t["mean_score"].to_string(),
+                twins[0]["mean_score"].to_string()
+            );
+            assert_eq!(t["score_sum30"], twins[0]["score_sum30"], "{results}");
+            // Shown with 3 decimals at most.
+            let shown = t["mean_score"].to_string();
+            assert!(
+                shown.split('.').nth(1).is_none_or(|d| d.len() <= 3),
+                "{shown}"
+            );
+        }
+        printed.push((
+            twins[0]["rank"].as_i64().unwrap(),
+            format!("{:.3}", twins[0]["mean_score"].as_f64().unwrap()),
+        ));
+    }
+    // The two programs differ: their ranks are 1 and 4, or 1 and 3.
+    let mut ranks: Vec<i64> = printed.iter().map(|p| p.0).collect();
+    ranks.sort_unstable();
+    assert!(
+        ranks == [1, 4] || ranks == [1, 3] || ranks == [1, 1],
+        "{results}"
+    );
+
+    // results.csv: the same ranks and the same printed means.
+    let csv = server
+        .client()
+        .get(format!(
+            "{}/api/competitions/twins/results.csv",
+            server.base
+        ))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (rank, entrant, mean) = (f[0], f[3], f[8]);
+        let (want_rank, want_mean) = &printed[if entrant.starts_with('s') { 0 } else { 1 }];
+        assert_eq!(
+            (rank, mean),
+            (want_rank.to_string().as_str(), want_mean.as_str()),
+            "{csv}"
+        );
+    }
+
+    // The CLI's table from the server's database.
+    let out = crate::support::mazearena(&[
+        "competition",
+        "results",
+        "twins",
+        "--database",
+        &server.database,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout).to_string();
+    for (prefix, n) in [("s", 3), ("m", 2)] {
+        let (rank, mean) = &printed[if prefix == "s" { 0 } else { 1 }];
+        let lines: Vec<&str> = table
+            .lines()
+            .filter(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .is_some_and(|e| e.starts_with(prefix) && e.len() == 2)
+            })
+            .collect();
+        assert_eq!(lines.len(), n, "{table}");
+        for l in lines {
+            let words: Vec<&str> = l.split_whitespace().collect();
+            assert_eq!(
+                (words[0], words[4]),
+                (rank.to_string().as_str(), mean.as_str()),
+                "{table}"
+            );
+        }
+    }
+
+    // The page: each twin's row shows the shared rank and the same mean.
+    let (_, page) = server.get_text("/competitions/twins").await;
+    for (prefix, n) in [("s", 3), ("m", 2)] {
+        let (_, mean) = &printed[if prefix == "s" { 0 } else { 1 }];
+        assert!(
+            page.matches(&format!(">{mean}<")).count() >= n,
+            "{mean} is not shown {n} times: {page}"
+        );
+    }
+}
