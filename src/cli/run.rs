@@ -28,12 +28,18 @@ pub struct RunArgs {
     /// Print one JSON object with the result instead of the progress text.
     #[arg(long)]
     json: bool,
-    /// Time limit for every answer after the first, in milliseconds.
+    /// CPU time limit for every answer after the first, in milliseconds (CPU time of all
+    /// the bot's processes: the same on an idle or a busy machine).
     #[arg(long, default_value_t = runner::DEFAULT_MOVE_TIMEOUT.as_millis() as u64)]
     move_timeout_ms: u64,
-    /// Time limit for the first answer (includes the interpreter's start), in milliseconds.
+    /// CPU time limit for the first answer (includes the interpreter's start), in
+    /// milliseconds.
     #[arg(long, default_value_t = runner::DEFAULT_STARTUP_TIMEOUT.as_millis() as u64)]
     startup_timeout_ms: u64,
+    /// CPU time the moves may use beyond their limit, all together over the match, in
+    /// milliseconds (a few slow moves do not end a match).
+    #[arg(long, default_value_t = runner::DEFAULT_TIME_BANK.as_millis() as u64)]
+    time_bank_ms: u64,
     /// No time limits at all (to debug a bot step by step).
     #[arg(long)]
     no_timeout: bool,
@@ -88,6 +94,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let limits = Limits {
         startup_timeout: (!args.no_timeout).then(|| Duration::from_millis(args.startup_timeout_ms)),
         move_timeout: (!args.no_timeout).then(|| Duration::from_millis(args.move_timeout_ms)),
+        time_bank: Duration::from_millis(args.time_bank_ms),
         memory_limit_mb: (args.memory_limit_mb > 0).then_some(args.memory_limit_mb),
         process_limit: Some(args.process_limit.max(1)),
         scratch_mb: args.scratch_mb.max(1),

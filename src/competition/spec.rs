@@ -177,12 +177,15 @@ pub struct MazeSets<M> {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Limits {
-    /// Time for every answer after the first (ms).
+    /// CPU time for every answer after the first (ms).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub move_timeout_ms: Option<u64>,
-    /// Time for the first answer, from the process start (ms).
+    /// CPU time for the first answer, from the process start (ms).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub startup_timeout_ms: Option<u64>,
+    /// CPU time the moves of a match may use beyond `move_timeout_ms`, all together (ms).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_bank_ms: Option<u64>,
     /// The bot's memory (MiB).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub memory_limit_mb: Option<u64>,
@@ -385,6 +388,7 @@ impl Limits {
         let ranges = [
             ("move_timeout_ms", self.move_timeout_ms, 1, 60_000),
             ("startup_timeout_ms", self.startup_timeout_ms, 1, 600_000),
+            ("time_bank_ms", self.time_bank_ms, 0, 600_000),
             ("memory_limit_mb", self.memory_limit_mb, 16, 16_384),
         ];
         for (field, value, low, high) in ranges {
@@ -407,6 +411,9 @@ impl Limits {
         }
         if let Some(ms) = self.startup_timeout_ms {
             base.startup_timeout = Some(Duration::from_millis(ms));
+        }
+        if let Some(ms) = self.time_bank_ms {
+            base.time_bank = Duration::from_millis(ms);
         }
         if let Some(mb) = self.memory_limit_mb {
             base.memory_limit_mb = Some(mb);

@@ -906,6 +906,9 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
     if let Some(ms) = limits.startup_timeout_ms {
         limit_args.push_str(&format!(" --startup-timeout-ms {ms}"));
     }
+    if let Some(ms) = limits.time_bank_ms {
+        limit_args.push_str(&format!(" --time-bank-ms {ms}"));
+    }
     if let Some(mb) = limits.memory_limit_mb {
         limit_args.push_str(&format!(" --memory-limit-mb {mb}"));
     }

@@ -41,6 +41,17 @@ pub const DEFAULT_STARTUP_TIMEOUT: Duration = Duration::from_secs(10);
 /// Default time for every later answer.
 pub const DEFAULT_MOVE_TIMEOUT: Duration = Duration::from_millis(1000);
 
+/// Default time bank: CPU time the moves of a match may use beyond their limits, all
+/// together (a few slow moves do not end a match: 10 moves of 2 s under a 1 s limit).
+pub const DEFAULT_TIME_BANK: Duration = Duration::from_secs(10);
+
+/// The wall-clock backstop of an answer, as a multiple of its CPU time: an answer is
+/// given up on once the wall-clock time since it was asked passes this many times (the
+/// step's limit + the CPU time the bot has used on it). A bot that waits instead of
+/// thinking is stopped after 4x its limit; one that thinks is never stopped by the
+/// clock while it gets at least a quarter of a core, however busy the machine.
+pub const WALL_BACKSTOP_FACTOR: u32 = 4;
+
 /// Default memory limit: 1 GiB of resident memory for all the bot's processes together
 /// (in the sandbox). Without the sandbox each process gets twice this as address space
 /// (JavaScript runtimes reserve a lot of virtual memory up front).
@@ -87,10 +98,14 @@ impl BotSpec {
 pub struct Limits {
     /// The shared step budget.
     pub max_steps: u32,
-    /// Time for the first answer, from the process start; `None`: no limit.
+    /// CPU time for the first answer, from the process start; `None`: no limit.
     pub startup_timeout: Option<Duration>,
-    /// Time for every later answer; `None`: no limit.
+    /// CPU time for every later answer; `None`: no limit. CPU time of every process of
+    /// the bot (its cgroup, or its process tree), the same on an idle or a busy
+    /// machine; where no CPU counter can be read, wall-clock time.
     pub move_timeout: Option<Duration>,
+    /// CPU time the moves may use beyond `move_timeout`, all together over the match.
+    pub time_bank: Duration,
     /// Memory limit in MiB (see [`DEFAULT_MEMORY_LIMIT_MB`]); `None`: no limit.
     pub memory_limit_mb: Option<u64>,
     /// Processes and threads at once (sandbox only); `None`: no limit.
@@ -105,6 +120,7 @@ impl Default for Limits {
             max_steps: GameConfig::default().max_steps,
             startup_timeout: Some(DEFAULT_STARTUP_TIMEOUT),
             move_timeout: Some(DEFAULT_MOVE_TIMEOUT),
+            time_bank: DEFAULT_TIME_BANK,
             memory_limit_mb: Some(DEFAULT_MEMORY_LIMIT_MB),
             process_limit: Some(DEFAULT_PROCESS_LIMIT),
             scratch_mb: DEFAULT_SCRATCH_MB,
@@ -119,6 +135,7 @@ impl Limits {
             max_steps: self.max_steps,
             startup_timeout_ms: self.startup_timeout.map(|d| d.as_millis() as u64),
             move_timeout_ms: self.move_timeout.map(|d| d.as_millis() as u64),
+            time_bank_ms: self.move_timeout.map(|_| self.time_bank.as_millis() as u64),
             memory_limit_mb: self.memory_limit_mb,
             process_limit: self.process_limit.filter(|_| sandboxed),
             scratch_mb: sandboxed.then_some(self.scratch_mb),

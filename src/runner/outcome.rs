@@ -179,10 +179,14 @@ pub struct LimitHit {
 pub struct LimitsRecord {
     /// The shared step budget.
     pub max_steps: u32,
-    /// Time for the first answer, from the process start; `None`: no limit.
+    /// CPU time for the first answer, from the process start; `None`: no limit.
     pub startup_timeout_ms: Option<u64>,
-    /// Time for every later answer; `None`: no limit.
+    /// CPU time for every later answer; `None`: no limit.
     pub move_timeout_ms: Option<u64>,
+    /// CPU time the moves may use over their limits, over the whole match (absent in
+    /// records made before there was a bank: they had none, and wall-clock limits).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_bank_ms: Option<u64>,
     /// The bot's memory limit in MiB; `None`: no limit. In the sandbox it counts the
     /// resident memory of all the bot's processes together; without it, it is each
     /// process's address space.

@@ -13,7 +13,7 @@ use tokio::time::timeout_at;
 use super::framing;
 use super::outcome::{Failure, LimitHit, MatchStatus};
 use super::process::{self, BotOutput, BotProcess, BotStdin, LimitKind};
-use super::{EXIT_GRACE, Limits};
+use super::{EXIT_GRACE, Limits, WALL_BACKSTOP_FACTOR};
 use crate::engine::Action;
 use crate::engine::game::Sense;
 use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
@@ -79,6 +79,14 @@ pub struct Session {
     started: Instant,
     limits: Limits,
     cpu_mark: Option<u64>,
+    /// Whether the bot's CPU time can be read: the time limits count it, else they
+    /// count wall-clock time.
+    cpu_counted: bool,
+    /// What is left of the match's time bank, in µs.
+    bank_left_us: u64,
+    /// While an answer is waited for: the CPU counter when it was asked and the CPU
+    /// time it may use, in µs (looked at with the whole-match limits).
+    cpu_cap: Option<(u64, u64)>,
     watchdog: tokio::time::Interval,
     /// The time limit of the step being asked, for a wait through the runtime: one
     /// timer for the whole match, moved to each step's deadline (a timer made per step
@@ -98,6 +106,8 @@ enum Waited {
     TimedOut,
     /// A whole-match limit was hit.
     Limit(LimitKind),
+    /// The step used more CPU time than it may: (used, allowed), in µs.
+    CpuOver(u64, u64),
     /// Nothing yet on the match's thread: wait through the runtime.
     Later,
 }
@@ -126,6 +136,7 @@ impl Session {
             .expect("the pipes are made by process::spawn");
         let mut watchdog = tokio::time::interval(WATCHDOG_PERIOD);
         watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let cpu_counted = process.cpu_us().is_some();
         Ok(Session {
             stderr: framing::StderrReader::new(stderr, framing::STDERR_TAIL_BYTES, echo_stderr),
             replies: framing::ReplyReader::new(stdout),
@@ -133,6 +144,9 @@ impl Session {
             started,
             limits,
             cpu_mark: Some(0),
+            cpu_counted,
+            bank_left_us: limits.time_bank.as_micros() as u64,
+            cpu_cap: None,
             watchdog,
             step_limit: Box::pin(tokio::time::sleep_until(started.into())),
             watch_at: started + WATCHDOG_PERIOD,
@@ -183,18 +197,49 @@ impl Session {
         } else {
             (sent_at, self.limits.move_timeout)
         };
-        let deadline = limit.map(|l| since + l);
+        // The CPU time this answer may use: its limit, and for a move what is left of
+        // the bank. Without a CPU counter, the limit is wall-clock time.
+        let allowed_us = limit.map(|l| {
+            let bank = if sense.step == 1 {
+                0
+            } else {
+                self.bank_left_us
+            };
+            l.as_micros() as u64 + bank
+        });
+        let mark = self.cpu_mark.unwrap_or(0);
+        self.cpu_cap = allowed_us.filter(|_| self.cpu_counted).map(|a| (mark, a));
+        let factor = if self.cpu_counted {
+            WALL_BACKSTOP_FACTOR
+        } else {
+            1
+        };
+        let mut deadline = limit.map(|l| since + l * factor);
         let line = ServerMessage::sense(sense).to_line();
         if let Err(e) = self.send_sense(line.as_bytes(), deadline).await {
             let (status, failure) = write_failure(e, sense.step);
             return self.limit_or(Verdict::Fault(status, failure), sense.step);
         }
-        let waited = match self.wait_near(deadline) {
-            Waited::Later => self.wait_through_runtime(deadline).await,
-            waited => waited,
+        let waited = loop {
+            let waited = match self.wait_near(deadline) {
+                Waited::Later => self.wait_through_runtime(deadline).await,
+                waited => waited,
+            };
+            // The wall-clock backstop moves out with the CPU time the bot uses: a bot
+            // that thinks on a busy machine is not stopped by the clock.
+            if let (Waited::TimedOut, Some(l), true) = (&waited, limit, self.cpu_counted) {
+                let used = self.cpu_used(mark);
+                let backstop = since + (l + Duration::from_micros(used)) * factor;
+                if Instant::now() < backstop {
+                    deadline = Some(backstop);
+                    continue;
+                }
+            }
+            break waited;
         };
+        self.cpu_cap = None;
         match waited {
-            Waited::Got(Ok(framing::Next::Line)) => self.answer(since, sense.step),
+            Waited::Got(Ok(framing::Next::Line)) => self.answer(since, sense.step, allowed_us),
             Waited::Got(Ok(framing::Next::End)) => {
                 let reason = format!(
                     "the bot closed its stdout (or exited) before answering step {}",
@@ -214,15 +259,29 @@ impl Session {
             Waited::TimedOut | Waited::Later => {
                 let what = if sense.step == 1 { "startup" } else { "move" };
                 let ms = limit.map_or(0, |l| l.as_millis());
-                let mut reason = format!(
-                    "no answer to step {} within the {what} limit of {ms} ms",
-                    sense.step
-                );
+                let mut reason = if self.cpu_counted {
+                    let used = self.cpu_used(mark) / 1000;
+                    format!(
+                        "no answer to step {} within {} ms of wall-clock time, in which the bot \
+                         used {used} ms of CPU time: it was waiting, not thinking (an answer is \
+                         given up on after {WALL_BACKSTOP_FACTOR} x (the {what} limit of {ms} ms \
+                         + the CPU time used))",
+                        sense.step,
+                        since.elapsed().as_millis()
+                    )
+                } else {
+                    format!(
+                        "no answer to step {} within the {what} limit of {ms} ms",
+                        sense.step
+                    )
+                };
                 if sense.step == 1 {
                     reason.push_str(STARTUP_HINT);
                 }
-                self.fault_or_limit(MatchStatus::Timeout, reason, sense.step)
+                let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, sense.step);
+                with_time_limit(verdict, "wall_clock", since.elapsed().as_millis() as u64)
             }
+            Waited::CpuOver(used, allowed) => self.cpu_fault(sense.step, used, allowed, limit),
             Waited::Limit(kind) => self.limit_fault(kind, sense.step),
         }
     }
@@ -242,6 +301,9 @@ impl Session {
                 _ = self.watchdog.tick() => {
                     if let Some(kind) = self.process.limit_hit() {
                         return Waited::Limit(kind);
+                    }
+                    if let Some(over) = self.cpu_over() {
+                        return over;
                     }
                 }
             }
@@ -285,6 +347,9 @@ impl Session {
                 if let Some(kind) = self.process.limit_hit() {
                     return Waited::Limit(kind);
                 }
+                if let Some(over) = self.cpu_over() {
+                    return over;
+                }
             }
             if now >= until {
                 return match deadline {
@@ -319,8 +384,46 @@ impl Session {
         }
     }
 
-    /// The verdict on the line the replies hold, answered `since`.
-    fn answer(&mut self, since: Instant, step: u32) -> Verdict {
+    /// CPU time the bot has used since the counter read `mark`, in µs.
+    fn cpu_used(&self, mark: u64) -> u64 {
+        self.process
+            .cpu_us()
+            .map_or(0, |now| now.saturating_sub(mark))
+    }
+
+    /// [`Waited::CpuOver`] if the step being waited for has used more CPU time than
+    /// it may.
+    fn cpu_over(&self) -> Option<Waited> {
+        let (mark, allowed) = self.cpu_cap?;
+        let used = self.cpu_used(mark);
+        (used > allowed).then_some(Waited::CpuOver(used, allowed))
+    }
+
+    /// The timeout of step `step`, which used `used` µs of CPU time where it might use
+    /// `allowed` (its `limit` and what was left of the bank).
+    fn cpu_fault(&self, step: u32, used: u64, allowed: u64, limit: Option<Duration>) -> Verdict {
+        let what = if step == 1 { "startup" } else { "move" };
+        let ms = limit.map_or(0, |l| l.as_millis() as u64);
+        let bank = if step == 1 {
+            String::new()
+        } else {
+            format!(
+                " and the {} ms left of the match's time bank",
+                self.bank_left_us / 1000
+            )
+        };
+        let reason = format!(
+            "step {step} used more than {} ms of CPU time ({} ms when stopped): over the {what} limit of {ms} ms{bank}",
+            allowed / 1000,
+            used / 1000
+        );
+        let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, step);
+        with_time_limit(verdict, "cpu_time", allowed / 1000)
+    }
+
+    /// The verdict on the line the replies hold, answered `since`, which may have used
+    /// `allowed_us` of CPU time.
+    fn answer(&mut self, since: Instant, step: u32, allowed_us: Option<u64>) -> Verdict {
         let answer_us = since.elapsed().as_micros() as u64;
         let cpu_now = self.process.cpu_us();
         let cpu_us = match (self.cpu_mark, cpu_now) {
@@ -328,6 +431,22 @@ impl Session {
             _ => None,
         };
         self.cpu_mark = cpu_now;
+        // An answer that came after its CPU time ran out is late, however it was
+        // noticed: the same rule whenever the counter is read.
+        if let (Some(used), Some(allowed), true) = (cpu_us, allowed_us, self.cpu_counted) {
+            if used > allowed {
+                let limit = if step == 1 {
+                    self.limits.startup_timeout
+                } else {
+                    self.limits.move_timeout
+                };
+                return self.cpu_fault(step, used, allowed, limit);
+            }
+            if step > 1 {
+                let limit = self.limits.move_timeout.map_or(0, |l| l.as_micros() as u64);
+                self.bank_left_us = self.bank_left_us.saturating_sub(used.saturating_sub(limit));
+            }
+        }
         let line = self.replies.line();
         match crate::protocol::decode_answer(line) {
             Ok(answer) => Verdict::Answer {
@@ -429,6 +548,22 @@ pub fn limit_failure(kind: LimitKind, limits: &Limits, step: u32) -> (MatchStatu
         unit: unit.into(),
     });
     (status, f)
+}
+
+/// `verdict` with the time limit that ended it named (`cpu_time` or `wall_clock`, in ms),
+/// unless a whole-match limit explained it first.
+fn with_time_limit(verdict: Verdict, name: &str, value_ms: u64) -> Verdict {
+    match verdict {
+        Verdict::Fault(MatchStatus::Timeout, mut f) if f.limit.is_none() => {
+            f.limit = Some(LimitHit {
+                name: name.into(),
+                value: value_ms,
+                unit: "ms".into(),
+            });
+            Verdict::Fault(MatchStatus::Timeout, f)
+        }
+        v => v,
+    }
 }
 
 fn failure(reason: String, step: u32) -> Failure {

@@ -11,6 +11,7 @@ mod connections;
 mod contain;
 mod faults;
 mod hostile;
+mod load;
 mod mazefiles;
 mod pages;
 mod rankings;
