@@ -383,6 +383,7 @@ mod tests {
                 max_steps: 1000,
                 startup_timeout_ms: None,
                 move_timeout_ms: None,
+                time_bank_ms: None,
                 memory_limit_mb: None,
                 process_limit: None,
                 scratch_mb: None,

@@ -11,18 +11,28 @@ use serde_json::{Value, json};
 
 use crate::support::{ADMIN, TestServer, mazearena, root, shared_maze, wait_match};
 
-/// Processes that keep a CPU busy until dropped.
+/// Processes that keep a CPU busy until dropped. Each is the leader of a session of
+/// its own, as an independent program (or another match's bot) is: with the kernel's
+/// autogroup scheduling, processes of one session share one CPU share, so four hogs in
+/// the test's session would weigh no more than one.
 struct Hogs(Vec<Child>);
 
 impl Hogs {
     fn start(n: usize) -> Hogs {
+        use std::os::unix::process::CommandExt;
         Hogs(
             (0..n)
                 .map(|_| {
-                    Command::new("python3")
-                        .args(["-c", "while True: pass"])
-                        .spawn()
-                        .expect("python3 runs")
+                    let mut c = Command::new("python3");
+                    c.args(["-c", "while True: pass"]);
+                    // SAFETY: setsid is async-signal-safe and touches no memory.
+                    unsafe {
+                        c.pre_exec(|| {
+                            libc::setsid();
+                            Ok(())
+                        });
+                    }
+                    c.spawn().expect("python3 runs")
                 })
                 .collect(),
         )
