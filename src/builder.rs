@@ -2,10 +2,13 @@
 //! build command (one build at a time per pool; a claim is a lease in the database, so
 //! each version is built once, by one worker of one machine), runs the build in the
 //! sandbox (`runner::build`) in a fresh folder holding the version's bundle, stores the
-//! built folder as a bundle of its own, and records the result: `ready` versions play
-//! from the built bundle on every worker, `build_failed` ones never play, and their
-//! owner reads the build log. A build whose worker died is claimed again once its lease
-//! expires.
+//! built folder as a bundle of its own, plays the version's **validation match** (one
+//! short match on a public generated maze, like a validation episode: a version that
+//! crashes, times out or breaks the protocol there could not play any match), and
+//! records the result: `ready` versions play from the built bundle on every worker,
+//! `build_failed` and `invalid` ones never play (nor count against a quota), and their
+//! owner reads why in the build log. Versions uploaded without a build command are only
+//! validated. A build whose worker died is claimed again once its lease expires.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -15,13 +18,20 @@ use tokio::sync::Notify;
 use tokio_util::sync::CancellationToken;
 
 use crate::registry::{self, RegistryError};
-use crate::runner::{Sandbox, build};
+use crate::runner::{BotSpec, Limits, MatchStatus, Sandbox, build};
 use crate::storage::Storage;
-use crate::storage::bots::BotVersionRow;
+use crate::storage::bots::{BotVersionRow, build_status};
 use crate::storage::builds::{MAX_BUILD_ATTEMPTS, build_retries_exhausted};
 
 /// How often the queue of builds is looked at when nothing wakes the builder.
 const POLL: Duration = Duration::from_secs(2);
+
+/// The validation match's steps: enough for a bot to start and make its first moves
+/// (running out of them is no fault).
+const VALIDATION_STEPS: u32 = 60;
+
+/// The validation match's maze: generated (public, the same for every version).
+const VALIDATION_MAZE: (u32, u64) = (12, 20_260_101);
 
 /// What a pool's builder needs.
 #[derive(Debug, Clone)]
@@ -42,8 +52,13 @@ pub struct Builder {
 
 /// How a claimed build ended.
 enum Ended {
-    /// Record it, with the log: `ready` with its built bundle, else `build_failed`.
-    Done { built: Option<String>, log: String },
+    /// Record it, with the log: `ready` with its built bundle, or `build_failed` or
+    /// `invalid`.
+    Done {
+        status: &'static str,
+        built: Option<String>,
+        log: String,
+    },
     /// Not recorded (the lease was lost, or the database or disk failed): the build is
     /// claimed again once its lease expires.
     Dropped,
@@ -80,12 +95,11 @@ impl Builder {
                 _ = stop.cancelled() => return,
                 ended = self.build_renewing(&version) => ended,
             };
-            if let Ended::Done { built, log } = ended {
-                let ok = built.is_some();
-                tracing::info!(bot_version_id = id, ok, "build ended");
+            if let Ended::Done { status, built, log } = ended {
+                tracing::info!(bot_version_id = id, status, "build ended");
                 match self
                     .storage
-                    .finish_build(id, &self.owner, ok, built.as_deref(), &log)
+                    .finish_build(id, &self.owner, status, built.as_deref(), &log)
                     .await
                 {
                     Ok(true) => {}
@@ -131,13 +145,14 @@ impl Builder {
                 "a build kept outliving its worker; recorded as failed"
             );
             return Ended::Done {
+                status: build_status::FAILED,
                 built: None,
                 log: build_retries_exhausted(version.build_attempts - 1),
             };
         }
-        let command = version.build_command.clone().unwrap_or_default();
         let Some(sha) = &version.bundle_sha256 else {
             return Ended::Done {
+                status: build_status::FAILED,
                 built: None,
                 log: "the version's files are not stored in the database (an old data folder \
                       that could not be moved): upload it again"
@@ -158,6 +173,7 @@ impl Builder {
             Err(e) if e.is_permanent() => {
                 tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "a version's stored files cannot be used; its build failed");
                 return Ended::Done {
+                    status: build_status::FAILED,
                     built: None,
                     log: format!(
                         "the server could not use the version's stored files: {e}; upload it again"
@@ -170,6 +186,15 @@ impl Builder {
                 return Ended::Dropped;
             }
         }
+        let Some(command) = version.build_command.clone() else {
+            // Nothing to build: the uploaded files play as they are, once validated.
+            let (status, log) = self.validate(version, &dir, String::new()).await;
+            return Ended::Done {
+                status,
+                built: None,
+                log,
+            };
+        };
         tracing::info!(bot_version_id = version.bot_version_id, %command, "building");
         let (ok, mut log) =
             match build::build_logged(&command, &area, &self.sandbox, version.runtime.as_deref())
@@ -185,16 +210,28 @@ impl Builder {
                 Err(e) => (false, e.to_string()),
             };
         if !ok {
-            return Ended::Done { built: None, log };
+            return Ended::Done {
+                status: build_status::FAILED,
+                built: None,
+                log,
+            };
         }
         match registry::bundles::store_dir(&self.storage, &dir, &self.scratch).await {
-            Ok(summary) => Ended::Done {
-                built: Some(summary.sha256),
-                log,
-            },
+            Ok(summary) => {
+                let (status, log) = self.validate(version, &dir, log).await;
+                Ended::Done {
+                    status,
+                    built: (status == build_status::READY).then_some(summary.sha256),
+                    log,
+                }
+            }
             Err(RegistryError::Bundle(e)) if e.is_client_error() => {
                 log.push_str(&format!("\n[the built folder cannot be stored: {e}]"));
-                Ended::Done { built: None, log }
+                Ended::Done {
+                    status: build_status::FAILED,
+                    built: None,
+                    log,
+                }
             }
             Err(e) => {
                 tracing::error!(cause = %e, bot_version_id = version.bot_version_id, "cannot store a built folder");
@@ -204,9 +241,115 @@ impl Builder {
     }
 }
 
+impl Builder {
+    /// Plays the validation match of `version` from its folder `dir`: `ready`, or
+    /// `invalid` when the bot crashed, timed out or broke the protocol, with `log` and
+    /// what happened added to it (the reason, the end of its stderr, a hint).
+    async fn validate(
+        &self,
+        version: &BotVersionRow,
+        dir: &std::path::Path,
+        mut log: String,
+    ) -> (&'static str, String) {
+        let maze = match crate::engine::generator::generate(VALIDATION_MAZE.0, VALIDATION_MAZE.1) {
+            Ok(m) => m,
+            Err(e) => {
+                tracing::error!(cause = %e, "cannot make the validation maze");
+                return (build_status::READY, log);
+            }
+        };
+        let bot = BotSpec {
+            command: version.command.clone(),
+            dir: dir.to_path_buf(),
+            env: version.env_pairs(),
+            echo_stderr: false,
+            runtime: version.runtime.clone(),
+        };
+        let limits = Limits {
+            max_steps: VALIDATION_STEPS,
+            ..Limits::default()
+        };
+        let record = crate::runner::run_match(&bot, &maze, 0, limits, &self.sandbox, |_| {}).await;
+        if !log.is_empty() && !log.ends_with('\n') {
+            log.push('\n');
+        }
+        match record.status {
+            MatchStatus::Finished | MatchStatus::StepLimit => {
+                log.push_str(&format!(
+                    "[validation match: played {} steps on a public {}x{} maze without a fault]",
+                    record.total_steps, VALIDATION_MAZE.0, VALIDATION_MAZE.0
+                ));
+                (build_status::READY, log)
+            }
+            status => {
+                let reason = record
+                    .error
+                    .as_ref()
+                    .map_or_else(|| status.to_string(), |e| e.reason.clone());
+                log.push_str(&format!("[validation match: {status}: {reason}]\n"));
+                let tail = record.stderr_tail.trim_end();
+                if !tail.is_empty() {
+                    log.push_str(&format!("--- the end of its stderr ---\n{tail}\n"));
+                }
+                if let Some(hint) = validation_hint(&version.command, tail) {
+                    log.push_str(&format!("hint: {hint}\n"));
+                }
+                log.push_str("This version is invalid: it will not play, and it does not count against your quota.");
+                (build_status::INVALID, log)
+            }
+        }
+    }
+}
+
+/// A hint for a version that failed its validation match, from its command and the end
+/// of its stderr.
+pub fn validation_hint(command: &str, stderr: &str) -> Option<&'static str> {
+    let python = command
+        .split_whitespace()
+        .next()
+        .is_some_and(|w| w.contains("python"));
+    let python2 = stderr.contains("SyntaxError")
+        && (stderr.contains("print ")
+            || stderr.contains("Missing parentheses in call to 'print'")
+            || stderr.contains("except ")
+            || stderr.contains("xrange"));
+    if python && (python2 || (stderr.contains("SyntaxError") && !command.contains("2.7"))) {
+        return Some(
+            "is this Python 2? Python 3 cannot read it: choose a Python 2.7 runtime (GET \
+             /api/runtimes lists the server's; README \"A Python 2.7 runtime\") or port it to Python 3",
+        );
+    }
+    if stderr.contains("ModuleNotFoundError") || stderr.contains("ImportError") {
+        return Some(
+            "a module is missing: upload it with your files, or choose a runtime that has it \
+             (GET /api/runtimes lists the server's)",
+        );
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_python_2_syntax_error_gets_the_runtime_hint() {
+        let stderr = "  File \"robot.py\", line 12\n    print \"hello\"\n          ^\nSyntaxError: Missing parentheses in call to 'print'. Did you mean print(...)?";
+        assert!(
+            validation_hint("python3 udacity_adapter.py", stderr)
+                .unwrap()
+                .contains("Python 2")
+        );
+        assert!(validation_hint("./bot", stderr).is_none());
+        assert!(
+            validation_hint(
+                "python3 b.py",
+                "ModuleNotFoundError: No module named 'numpy'"
+            )
+            .unwrap()
+            .contains("module")
+        );
+    }
 
     #[tokio::test]
     async fn a_build_that_kept_outliving_its_worker_is_failed_not_run_again() {
@@ -232,7 +375,7 @@ mod tests {
             let row = row.unwrap();
             assert_eq!(row.bot_version_id, v.bot_version_id);
             assert_eq!(row.build_attempts, MAX_BUILD_ATTEMPTS + 1);
-            let Ended::Done { built, log } = builder.build(&row).await else {
+            let Ended::Done { built, log, .. } = builder.build(&row).await else {
                 panic!("the build was dropped again");
             };
             assert_eq!(built, None);

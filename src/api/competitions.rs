@@ -524,15 +524,16 @@ async fn submissions(
             .iter()
             .find(|r| r.bot_version_id == s.bot_version_id && !r.pending)
             .map(BoardLine::from_row);
-        let status = if s.build_status == "build_failed" || s.aborted {
-            "not_counted"
-        } else if line.is_some() {
-            "ranked"
-        } else if s.ranked || pending_public(s.bot_version_id) {
-            "playing"
-        } else {
-            "waiting"
-        };
+        let status =
+            if crate::storage::bots::build_status::never_plays(&s.build_status) || s.aborted {
+                "not_counted"
+            } else if line.is_some() {
+                "ranked"
+            } else if s.ranked || pending_public(s.bot_version_id) {
+                "playing"
+            } else {
+                "waiting"
+            };
         versions.push(SubmissionView {
             version: s.version,
             uploaded_at: Timestamp(s.created_at),

@@ -189,9 +189,14 @@ async fn create_match(
     if let Some(reason) = &bot.paused_reason {
         return Err(paused_error(bot.bot_id, reason));
     }
-    if bot.build_status == build_status::FAILED {
+    if build_status::never_plays(&bot.build_status) {
+        let what = if bot.build_status == build_status::INVALID {
+            "failed its validation match"
+        } else {
+            "failed to build"
+        };
         return Err(ApiError::Conflict(format!(
-            "version {} of bot {} failed to build, so it cannot play; its owner sees the log at \
+            "version {} of bot {} {what}, so it cannot play; its owner sees why at \
              GET /api/bots/{}/versions/{}/build-log",
             bot.version, bot.bot_id, bot.bot_id, bot.version
         )));

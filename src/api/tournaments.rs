@@ -109,9 +109,10 @@ async fn create_tournament(
         if let Some(reason) = &bot.paused_reason {
             return Err(super::matches::paused_error(id, reason));
         }
-        if bot.build_status == crate::storage::bots::build_status::FAILED {
+        if crate::storage::bots::build_status::never_plays(&bot.build_status) {
             return Err(ApiError::Conflict(format!(
-                "the latest version of bot {id} failed to build, so it cannot play"
+                "the latest version of bot {id} is {}, so it cannot play",
+                bot.build_status
             )));
         }
         versions.push(bot.bot_version_id);

@@ -410,7 +410,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                 println!("version {version} is ready: {page}");
                 Ok(())
             }
-            "build_failed" => {
+            "build_failed" | "invalid" => {
                 let owner = owner_api(&api, &cfg, bot_id);
                 let log: Value = owner
                     .get(&format!("/api/bots/{bot_id}/versions/{version}/build-log"))
@@ -418,6 +418,12 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                     .unwrap_or(Value::Null);
                 if let Some(log) = log["build_log"].as_str() {
                     eprintln!("--- build log ---\n{}", show::log(log.trim_end()));
+                }
+                if status == "invalid" {
+                    bail!(
+                        "version {version} is invalid: it failed its validation match (see the log above); \
+                         it will not play and does not count against your quota ({page})"
+                    )
                 }
                 bail!("version {version} failed to build: it will not play ({page})")
             }

@@ -110,6 +110,14 @@ pub mod build_status {
     pub const BUILDING: &str = "building";
     /// Its build failed: it never plays.
     pub const FAILED: &str = "build_failed";
+    /// Its validation match (after the build) failed: it crashed, timed out or broke
+    /// the protocol there, so it never plays and does not count against a quota.
+    pub const INVALID: &str = "invalid";
+
+    /// Whether a version of this status never plays.
+    pub fn never_plays(status: &str) -> bool {
+        status == FAILED || status == INVALID
+    }
 }
 
 /// A new version's details.
@@ -127,7 +135,9 @@ pub struct NewVersion<'a> {
     pub bundle_sha256: Option<&'a str>,
     /// Number of files.
     pub file_count: i64,
-    /// A build command: the version is `building` until it has run.
+    /// A build command: the version is `building` until it has run. A version whose
+    /// files are stored (`bundle_sha256`) is `building` too, until the builder has
+    /// played its validation match.
     pub build_command: Option<&'a str>,
     /// Declared environment variables (checked by `runner::botenv::check`).
     pub env: &'a [(String, String)],
@@ -462,7 +472,7 @@ async fn insert_version(
     bot_id: i64,
     new: &NewVersion<'_>,
 ) -> Result<BotVersionRow> {
-    let status = if new.build_command.is_some() {
+    let status = if new.build_command.is_some() || new.bundle_sha256.is_some() {
         build_status::BUILDING
     } else {
         build_status::READY

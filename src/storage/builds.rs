@@ -92,10 +92,11 @@ impl Storage {
         &self,
         bot_version_id: i64,
         owner: &str,
-        ok: bool,
+        status: &str,
         built: Option<&str>,
         log: &str,
     ) -> Result<bool> {
+        let ok = status == build_status::READY;
         let mut log = log.to_string();
         if log.len() > BUILD_LOG_BYTES {
             let mut cut = log.len() - BUILD_LOG_BYTES;
@@ -104,11 +105,6 @@ impl Storage {
             }
             log = format!("[... {cut} earlier bytes not kept]\n{}", &log[cut..]);
         }
-        let status = if ok {
-            build_status::READY
-        } else {
-            build_status::FAILED
-        };
         let now = now_ms();
         let _turn = self.write_turn().await;
         let mut tx = self.begin_write().await?;
@@ -144,7 +140,11 @@ impl Storage {
             )
             .bind(failure_record(
                 MatchStatus::Crashed,
-                &format!("the bot version's build failed: {tail}"),
+                &if status == build_status::INVALID {
+                    format!("the bot version failed its validation match: {tail}")
+                } else {
+                    format!("the bot version's build failed: {tail}")
+                },
             )?)
             .bind(now)
             .bind(bot_version_id)

@@ -271,7 +271,7 @@ pub(crate) const PRACTICE_MATCHES: &str = "from match m join bot b on b.bot_id =
 const COUNTED_VERSIONS: &str = "from bot_version v
      join competition_entry e on e.bot_id = v.bot_id and v.bot_version_id >= e.first_version_id
      where e.competition_id = $1 and e.entrant_id = $2 and v.created_at > $3
-         and v.build_status <> 'build_failed'
+         and v.build_status not in ('build_failed', 'invalid')
          and not exists (select 1 from match m join tournament t on t.tournament_id = m.tournament_id
              where t.competition_id = $1 and m.bot_version_id = v.bot_version_id and m.status = 'aborted')";
 
