@@ -140,9 +140,15 @@ mod tests {
             // Built in its folder, as servers did: the folder changed.
             fs::write(built_dir.join("bot"), "#!/bin/sh\n").unwrap();
             db.claim_build("old-server", 60_000).await.unwrap().unwrap();
-            db.finish_build(built.bot_version_id, "old-server", true, None, "ok")
-                .await
-                .unwrap();
+            db.finish_build(
+                built.bot_version_id,
+                "old-server",
+                build_status::READY,
+                None,
+                "ok",
+            )
+            .await
+            .unwrap();
             let (waiting, _) = old_upload(&db, data.path(), "waiting", Some("make")).await;
             let (gone, gone_dir) = old_upload(&db, data.path(), "gone", None).await;
             fs::remove_dir_all(gone_dir).unwrap();

@@ -190,7 +190,7 @@ mod tests {
             assert_eq!(again.bot_version_id, v.bot_version_id);
             assert_eq!((claimed.build_attempts, again.build_attempts), (1, 2));
             assert!(
-                !db.finish_build(v.bot_version_id, "w1", false, None, "late")
+                !db.finish_build(v.bot_version_id, "w1", build_status::FAILED, None, "late")
                     .await
                     .unwrap()
             );
@@ -198,7 +198,7 @@ mod tests {
                 db.finish_build(
                     v.bot_version_id,
                     "w2",
-                    false,
+                    build_status::FAILED,
                     None,
                     "cc: error: no such file\n"
                 )
@@ -226,9 +226,15 @@ mod tests {
             .await
             .unwrap();
             assert!(
-                db.finish_build(v2.bot_version_id, "w1", true, Some("b1"), "ok")
-                    .await
-                    .unwrap()
+                db.finish_build(
+                    v2.bot_version_id,
+                    "w1",
+                    build_status::READY,
+                    Some("b1"),
+                    "ok"
+                )
+                .await
+                .unwrap()
             );
             let claimed = db.claim_next("w", 1000, None).await.unwrap().unwrap();
             assert_eq!(claimed.match_id, m2);

@@ -325,7 +325,11 @@ async fn the_readme_competition_example_runs_as_written() {
     let addr = server.base.trim_start_matches("http://").to_string();
     let file = blocks_of("Running a competition", "toml").remove(0);
     std::fs::write(work.join("maze-cup/competition.toml"), file).unwrap();
-    let blocks = blocks("Running a competition");
+    // The README read top to bottom: the competition made and entered, a second
+    // entrant taking part with the client, then the close.
+    let mut blocks = blocks("Running a competition");
+    assert_eq!(blocks.len(), 2, "{blocks:?}");
+    blocks.extend(self::blocks("Closing a competition"));
     assert_eq!(blocks.len(), 4, "{blocks:?}");
     let run = |block: &str| sh(&work, &block.replace("localhost:8080", &addr), &[]);
     // The mazes and the competition, from its file.
