@@ -64,6 +64,8 @@ pub struct WorkerConfig {
     pub builds: Option<PathBuf>,
     /// The bound of each build's writable area, in bytes.
     pub build_write_bytes: u64,
+    /// Play each new version's validation match after its build ([`crate::builder`]).
+    pub validate: bool,
 }
 
 /// How often a reported worker refreshes its row (and looks for expired leases).
@@ -160,6 +162,7 @@ pub fn spawn_workers(
             write_limit: config.build_write_bytes,
             owner: owner.clone(),
             lease: config.lease,
+            validate: config.validate,
         };
         tracker.spawn(builder.run(wake.clone(), shutdown.stop_claiming.clone()));
     }

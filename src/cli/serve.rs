@@ -115,6 +115,11 @@ pub struct ServeArgs {
 /// The match workers' settings, shared by `serve` and `worker`.
 #[derive(Debug, Args)]
 pub(super) struct PoolArgs {
+    /// Do not play a new version's validation match: every version that builds is
+    /// `ready`, even one that crashes at its first step (for testing the server with
+    /// misbehaving bots; an open server should validate).
+    #[arg(long, env = "MAZEARENA_NO_VALIDATION")]
+    no_validation: bool,
     /// Matches played at once, at most one per core (default: the number of cores).
     /// `serve --jobs 0` plays none: it serves the API only, leaving the matches to
     /// `mazearena worker` processes.
@@ -192,6 +197,7 @@ impl PoolArgs {
             cache,
             builds: Some(builds),
             build_write_bytes: self.build_write_mib << 20,
+            validate: !self.no_validation,
         })
     }
 

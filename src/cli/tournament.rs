@@ -238,6 +238,7 @@ async fn play(
             )?,
             builds: None,
             build_write_bytes: crate::runner::build::DEFAULT_BUILD_WRITE_BYTES,
+            validate: false,
         },
         None,
         Arc::new(Notify::new()),

@@ -192,6 +192,7 @@ impl Storage {
             row.rank = i as i64 + 1;
             row.mean_score = row.mean().rounded();
             row.finish_rate = ratio_3dp(row.finished, row.played);
+            row.mean_ratio = row.mean_ratio.map(crate::ranking::mean::round_3dp);
         }
         Ok(rows)
     }

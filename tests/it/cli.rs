@@ -714,7 +714,13 @@ async fn an_owner_over_its_storage_cap_queues_nothing_until_pruned() {
     let dir = tempfile::tempdir().unwrap();
     let server = crate::support::TestServer::start(
         dir.path(),
-        &["--jobs", "1", "--max-stored-mib-per-owner", "0.01"],
+        &[
+            "--jobs",
+            "1",
+            "--max-stored-mib-per-owner",
+            "0.01",
+            "--no-validation",
+        ],
     );
     // 60 KiB of stderr that does not compress, then it quits: over 10 KiB stored.
     let noisy = "import os, sys\nsys.stdin.readline()\nsys.stdin.readline()\n\

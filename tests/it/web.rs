@@ -159,7 +159,7 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let server = TestServer::start(dir.path(), &["--jobs", "2"]);
+    let server = TestServer::start(dir.path(), &["--jobs", "2", "--no-validation"]);
     let (simple, token) = register(
         &server,
         "simple",
