@@ -354,7 +354,7 @@ async fn enter(
             "the default competition needs no entry: every bot's latest version counts".into(),
         ));
     }
-    if ops::phase(&c, now_ms()) == Phase::Closed {
+    if ops::phase(&c, now_ms()).is_closed() {
         return Err(ApiError::Conflict(format!(
             "competition {} closed at {} UTC",
             c.name,
@@ -467,7 +467,9 @@ pub struct SubmissionView {
     /// `waiting` (not yet queued), `playing`, `ranked` (all its public matches
     /// played), `not_counted` (failed to build, or the server could not play it).
     pub status: String,
-    /// Its public-ranking numbers, once all its public matches are played.
+    /// Its public-ranking numbers, once all its public matches are played: its mean and
+    /// the rank that mean has among the other entrants' lines of the public board as
+    /// the entrant sees it (over hidden mazes: the means only, no interval).
     pub public: Option<BoardLine>,
     /// Chosen for the final (`choice` rule).
     pub chosen: bool,
@@ -490,6 +492,11 @@ pub struct SubmissionsView {
     pub versions_quota: Quota,
     /// The practice quota now.
     pub practice_quota: Quota,
+    /// The competition's phase (`final` once the results are written).
+    pub phase: Phase,
+    /// The entrant's final result, once the results are written: its rank (shared by
+    /// equal means), the version that counted and its numbers on the private set.
+    pub final_result: Option<BoardLine>,
 }
 
 /// "My submissions": the entrant's versions (the entrant's key), their status, their own
@@ -518,12 +525,24 @@ async fn submissions(
         None => Vec::new(),
     };
     let pending_public = |id: i64| public.iter().any(|r| r.bot_version_id == id && r.pending);
+    let shown = ops::board(&state.storage, &c, BoardKind::Public, false, now).await?;
+    let ranked_line = |r: &crate::storage::competitions::BoardRow| {
+        let mut line = BoardLine::from_row(r);
+        let better = shown
+            .standings
+            .iter()
+            .filter(|l| l.entrant != e.name && l.mean() < line.mean())
+            .count() as i64;
+        line.rank = better + 1;
+        line.uncertainty = crate::ranking::withheld(&[(line.rank, line.mean())]).remove(0);
+        line
+    };
     let mut versions = Vec::new();
     for s in state.storage.submissions(&c, e.entrant_id).await? {
         let line = public
             .iter()
             .find(|r| r.bot_version_id == s.bot_version_id && !r.pending)
-            .map(BoardLine::from_row);
+            .map(ranked_line);
         let status =
             if crate::storage::bots::build_status::never_plays(&s.build_status) || s.aborted {
                 "not_counted"
@@ -544,10 +563,33 @@ async fn submissions(
             selected: s.selected,
         });
     }
+    let final_result = if c.state.as_deref() == Some("final") {
+        ops::results(&state.storage, &c)
+            .await?
+            .into_iter()
+            .find(|r| r.entrant_id == e.entrant_id)
+            .map(|r| BoardLine {
+                rank: r.rank,
+                entrant: r.entrant_name.clone(),
+                bot_id: r.bot_id,
+                bot_name: r.bot_name.clone(),
+                version: r.version,
+                played: r.played,
+                finished: r.finished,
+                mean_score: r.mean_score,
+                score_sum30: r.score_sum30,
+                finish_rate: r.finish_rate,
+                uncertainty: r.uncertainty.clone(),
+            })
+    } else {
+        None
+    };
     Ok(axum::Json(SubmissionsView {
         competition: c.name.clone(),
         entrant: e.name.clone(),
         bot_id: entry.map(|x| x.bot_id),
+        phase: ops::phase(&c, now),
+        final_result,
         versions,
         versions_quota: ops::version_quota(&state.storage, &c, e.entrant_id, now).await?,
         practice_quota: ops::practice_quota(&state.storage, &c, e.entrant_id, now).await?,
@@ -584,7 +626,7 @@ async fn choose(
             c.name, c.selection
         )));
     }
-    if ops::phase(&c, now_ms()) == Phase::Closed {
+    if ops::phase(&c, now_ms()).is_closed() {
         return Err(ApiError::Conflict(format!(
             "competition {} is closed",
             c.name

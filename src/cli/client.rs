@@ -542,6 +542,7 @@ pub fn status(args: StatusArgs) -> anyhow::Result<()> {
                         });
                         competitions.push(json!({
                             "competition": name, "phase": c["phase"], "closes_at": c["closes_at"],
+                            "final_result": s["final_result"],
                             "submissions": s, "public_board": line,
                         }));
                     }
@@ -609,6 +610,14 @@ pub fn status(args: StatusArgs) -> anyhow::Result<()> {
                     "  public board: rank {} (possible {}), mean score {:.3}",
                     show::value(&l["rank"]), text(l["uncertainty"]["rank_range"].as_str().unwrap_or("?")),
                     l["mean_score"].as_f64().unwrap_or(0.0)
+                );
+            }
+            if let Some(f) = s["final_result"].as_object() {
+                println!(
+                    "  final result: rank {} with version {}, mean score {:.3} over {} private matches ({} finished)",
+                    show::value(&f["rank"]), show::value(&f["version"]),
+                    f["mean_score"].as_f64().unwrap_or(0.0),
+                    show::value(&f["played"]), show::value(&f["finished"])
                 );
             }
         }

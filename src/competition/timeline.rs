@@ -27,8 +27,10 @@ pub enum Phase {
     Open,
     /// Open, but the public leaderboard shows only versions uploaded before the freeze.
     Frozen,
-    /// After `closes_at`: no new versions; the final selection, run and results.
+    /// After `closes_at`: no new versions; the final selection and run.
     Closed,
+    /// Closed, and its results are written.
+    Final,
 }
 
 impl Phase {
@@ -39,7 +41,13 @@ impl Phase {
             Phase::Open => "open",
             Phase::Frozen => "frozen",
             Phase::Closed => "closed",
+            Phase::Final => "final",
         }
+    }
+
+    /// Whether uploads have stopped: closed, with or without its results.
+    pub fn is_closed(self) -> bool {
+        matches!(self, Phase::Closed | Phase::Final)
     }
 }
 

@@ -37,6 +37,9 @@ pub fn timeline(c: &CompetitionRow) -> Option<Timeline> {
 
 /// Its phase at `now` (the default competition is always open).
 pub fn phase(c: &CompetitionRow, now: i64) -> Phase {
+    if c.state.as_deref() == Some("final") {
+        return Phase::Final;
+    }
     timeline(c).map_or(Phase::Open, |t| t.phase(now))
 }
 
@@ -189,7 +192,7 @@ pub async fn edit(
         || patch.final_repeats.is_some()
         || patch.reveal_private_mazes.is_some()
         || patch.limits.is_some();
-    if phase == Phase::Closed && rules_change {
+    if phase.is_closed() && rules_change {
         return Err(RegistryError::Conflict(format!(
             "competition {} closed at {} UTC: only its title, description and rules can change",
             c.name,
@@ -378,7 +381,7 @@ pub async fn check_upload(
 ) -> Result<std::result::Result<Vec<VersionQuota>, UploadRefusal>> {
     let mut quotas = Vec::new();
     for c in storage.competitions_of_bot(bot_id).await? {
-        if phase(&c, now) == Phase::Closed {
+        if phase(&c, now).is_closed() {
             return Ok(Err(UploadRefusal::Closed(format!(
                 "competition {} closed at {} UTC: no new versions",
                 c.name,
@@ -633,8 +636,7 @@ pub async fn board(
         _ => Vec::new(),
     };
     let kept = rows.into_iter().filter(|r| {
-        organiser
-            || (!r.pending && frozen_at.is_none_or(|f| r.created_at < f || phase == Phase::Closed))
+        organiser || (!r.pending && frozen_at.is_none_or(|f| r.created_at < f || phase.is_closed()))
     });
     let mut standings = latest_per_bot(kept);
     // Over hidden mazes, nothing but the means for anyone but the organisers: an
@@ -778,7 +780,7 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
     }
     for c in storage.list_competitions().await? {
         if c.kind != "competition"
-            || phase(&c, now) != Phase::Closed
+            || !phase(&c, now).is_closed()
             || c.state.as_deref() == Some("final")
         {
             continue;

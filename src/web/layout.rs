@@ -40,12 +40,16 @@ pub fn status(s: &str) -> Markup {
     html! { span class={ "status " (s) } { (s) } }
 }
 
-/// A score with three decimals, or "DNF".
-pub fn score(s: Option<f64>) -> Markup {
+/// A match's score with three decimals: "hidden" for a finished match whose score the
+/// caller may not see (a hidden maze's), "DNF" for one that did not finish, "-" while
+/// it has not ended.
+pub fn score(status: &str, s: Option<f64>) -> Markup {
     html! {
-        @match s {
-            Some(v) => (format!("{v:.3}")),
-            None => span.muted { "DNF" },
+        @match (status, s) {
+            (_, Some(v)) => (format!("{v:.3}")),
+            ("finished", None) => span.muted title="the maze is hidden: its scores are not shown" { "hidden" },
+            ("queued" | "running", None) => span.muted { "-" },
+            (_, None) => span.muted { "DNF" },
         }
     }
 }

@@ -788,7 +788,7 @@ async fn twins_share_a_rank_and_print_equal_means_everywhere() {
     let spec = json!({
         "name": "twins", "title": "Twins",
         "opens_at": at(start), "closes_at": at(start + 3_600_000),
-        "repeats": 1, "final_repeats": 2,
+        "repeats": 1, "final_repeats": 2, "reveal_private_mazes": true,
         "mazes": {
             "public": [maze("twin-pub", 9102)],
             "private": [maze("twin-a", 9103), maze("twin-b", 9104), maze("twin-c", 9105)],
@@ -816,6 +816,7 @@ async fn twins_share_a_rank_and_print_equal_means_everywhere() {
             ["m1", "m2"].as_slice(),
         ),
     ];
+    let mut keys: Vec<(String, String)> = Vec::new();
     for (command, files, names) in &programs {
         for name in names.iter() {
             let (s, e) = server
@@ -823,6 +824,7 @@ async fn twins_share_a_rank_and_print_equal_means_everywhere() {
                 .await;
             assert_eq!(s, 201, "{e}");
             let key = e["key"].as_str().unwrap().to_string();
+            keys.push((name.to_string(), key.clone()));
             let body = json!({"name": format!("{name}-bot"), "command": command, "files": files});
             let (s, b) = server.post("/api/bots", body, Some(&key)).await;
             assert_eq!(s, 201, "{b}");
@@ -956,6 +958,36 @@ async fn twins_share_a_rank_and_print_equal_means_everywhere() {
             );
         }
     }
+
+    // Each entrant's own submissions say the phase and their final result.
+    for (name, key) in &keys {
+        let (s, mine) = server
+            .get("/api/competitions/twins/submissions", Some(key))
+            .await;
+        assert_eq!(s, 200, "{mine}");
+        assert_eq!(mine["phase"], "final", "{mine}");
+        let row = rows
+            .iter()
+            .find(|r| r["entrant_name"] == name.as_str())
+            .unwrap();
+        assert_eq!(mine["final_result"]["rank"], row["rank"], "{mine}");
+        assert_eq!(
+            mine["final_result"]["mean_score"], row["mean_score"],
+            "{mine}"
+        );
+        // Its public line has a real rank among the board's lines, not 0.
+        let public = &mine["versions"][0]["public"];
+        assert!(public["rank"].as_i64().is_some_and(|r| r >= 1), "{mine}");
+    }
+    let (_, c) = server.get("/api/competitions/twins", None).await;
+    assert_eq!(c["phase"], "final", "{c}");
+    // A final-run match on a revealed private maze has its replay, right after.
+    let manifest: Value = serde_json::from_str(rows[0]["manifest"].as_str().unwrap()).unwrap();
+    let id = manifest["matches"][0]["match_id"].as_i64().unwrap();
+    let (s, replay) = server.get(&format!("/api/matches/{id}/replay"), None).await;
+    assert_eq!(s, 200, "{replay}");
+    let (_, page) = server.get_text(&format!("/matches/{id}")).await;
+    assert!(!page.contains("removed to save space"), "{page}");
 
     // The page: each twin's row shows the shared rank and the same mean.
     let (_, page) = server.get_text("/competitions/twins").await;

@@ -21,15 +21,22 @@
       .then(function (j) {
         out.appendChild(el('p', j.versions_quota.message, 'quota'));
         out.appendChild(el('p', j.practice_quota.message, 'quota'));
+        if (j.final_result) {
+          var f = j.final_result;
+          out.appendChild(el('p', 'Final result: rank ' + f.rank + ' with version ' + f.version +
+            ', mean score ' + f.mean_score.toFixed(3) + ' over ' + f.played + ' private matches (' +
+            f.finished + ' finished).', 'final-result'));
+        }
         if (j.bot_id === null) { out.appendChild(el('p', 'No bot entered yet.', 'muted')); return; }
         var table = el('table', undefined, 'data submissions');
         var head = el('tr');
-        ['version', 'uploaded', 'build', 'status', 'public mean', 'finished'].forEach(function (h) { head.appendChild(el('th', h)); });
+        ['version', 'uploaded', 'build', 'status', 'public rank', 'public mean', 'finished'].forEach(function (h) { head.appendChild(el('th', h)); });
         table.appendChild(el('thead')).appendChild(head);
         var body = el('tbody');
         j.versions.forEach(function (v) {
           var tr = el('tr');
           [String(v.version), v.uploaded_at, v.build_status, v.status,
+           v.public ? String(v.public.rank) : '-',
            v.public ? v.public.mean_score.toFixed(3) : '-',
            v.public ? v.public.finished + '/' + v.public.played : '-'].forEach(function (t) { tr.appendChild(el('td', t)); });
           body.appendChild(tr);

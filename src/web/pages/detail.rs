@@ -123,7 +123,7 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
         h1 { (title) ": " (p.line.row.bot_name) " on " (p.line.row.maze_name) }
         div.cards {
             div.card { "status" b { (status(r.status.as_str())) } }
-            div.card { "score" b { @if r.status == "finished" { (score(r.score)) } @else { "-" } } }
+            div.card { "score" b { (score(&r.status.to_string(), r.score)) } }
             div.card { "run 0 / run 1 steps" b { (opt(r.run0_steps)) " / " (opt(r.run1_steps)) } }
             div.card { "seed" b { @if r.maze_hidden { "-" } @else { (r.seed) } } }
             @if let Some(t) = r.tournament_id {

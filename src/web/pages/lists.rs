@@ -191,7 +191,7 @@ pub fn match_table(lines: &[MatchLine]) -> Markup {
                             td.name { a href={ "/mazes/" (l.row.maze_id) } { (l.row.maze_name) } }
                             td.num { @if l.row.maze_hidden { span.muted { "-" } } @else { (l.row.seed) } }
                             td { (status(l.row.status.as_str())) }
-                            td.num { @if l.row.status == "finished" { (score(l.row.score)) } @else { span.muted { "-" } } }
+                            td.num { (score(&l.row.status.to_string(), l.row.score)) }
                             td.num { (opt(l.row.run0_steps)) }
                             td.num { (opt(l.row.run1_steps)) }
                             td.reason { @if let Some(r) = &l.reason { (r) } }
