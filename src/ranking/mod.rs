@@ -380,7 +380,7 @@ mod tests {
             })
             .collect();
         let mut sorted = bots.clone();
-        sorted.sort_by(|x, y| mean(x).cmp(&mean(y)));
+        sorted.sort_by_key(|x| mean(x));
         assert_eq!(table(&sorted), table(&sorted));
     }
 }

@@ -693,3 +693,89 @@ async fn submit_sends_no_dot_file_unless_bot_toml_includes_it() {
     let (_, _, versions) = stored(2).await;
     assert_eq!(versions, 2);
 }
+
+/// A robot.py written for Python 2, submitted with `python3` (as a student of the
+/// original task does): its validation match at upload crashes, so the version is
+/// `invalid`, never plays and costs no quota; `submit` fails with the SyntaxError and
+/// the hint, and the API, `status` and the bot's page say so.
+#[tokio::test]
+async fn a_python_2_robot_submitted_with_python3_is_invalid_at_upload_with_its_syntax_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "1"]);
+    let config = dir.path().join("client.toml");
+    let bot = dir.path().join("py2");
+    std::fs::create_dir(&bot).unwrap();
+    std::fs::copy(
+        root().join("bots/python/udacity_adapter.py"),
+        bot.join("udacity_adapter.py"),
+    )
+    .unwrap();
+    std::fs::copy(
+        root().join("tests/fixtures/robot_py/py2_robot.py"),
+        bot.join("robot.py"),
+    )
+    .unwrap();
+    std::fs::write(
+        bot.join("bot.toml"),
+        "name = \"py2-robot\"\ncommand = \"python3 udacity_adapter.py robot.py\"\n",
+    )
+    .unwrap();
+    let env = [("MAZEARENA_SERVER", server.base.as_str())];
+    let out = client(&config, &["submit", bot.to_str().unwrap()], &env);
+    let said = failed(&out, "submitting a Python 2 robot with python3");
+    assert!(said.contains("SyntaxError"), "{said}");
+    assert!(said.contains("is this Python 2?"), "{said}");
+    assert!(said.contains("version 1 is invalid"), "{said}");
+    // The API: invalid, with the log; no match may be asked of it.
+    let (_, bots) = server.get("/api/bots", None).await;
+    let id = bots["items"]
+        .as_array()
+        .or(bots.as_array())
+        .unwrap()
+        .iter()
+        .find(|b| b["name"] == "py2-robot")
+        .unwrap()["bot_id"]
+        .as_i64()
+        .unwrap();
+    let (_, b) = server.get(&format!("/api/bots/{id}"), None).await;
+    assert_eq!(b["versions"][0]["build_status"], "invalid", "{b}");
+    let kept = std::fs::read_to_string(&config).unwrap();
+    let token = kept
+        .split("token = \"")
+        .nth(1)
+        .and_then(|t| t.split('"').next())
+        .unwrap()
+        .to_string();
+    let (s, log) = server
+        .get(
+            &format!("/api/bots/{id}/versions/1/build-log"),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 200, "{log}");
+    let text = log["build_log"].as_str().unwrap();
+    assert!(
+        text.contains("[validation match: crashed") && text.contains("SyntaxError"),
+        "{text}"
+    );
+    let (s, v) = server
+        .post(
+            "/api/matches",
+            json!({"bot_id": id, "maze_id": 1, "seed": 1}),
+            Some(&token),
+        )
+        .await;
+    assert_eq!(s, 409, "{v}");
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("failed its validation match"),
+        "{v}"
+    );
+    // `status` shows it, and so does the bot's page.
+    let out = ok(&client(&config, &["status"], &env), "status");
+    assert!(out.contains("invalid"), "{out}");
+    let (_, page) = server.get_text(&format!("/bots/{id}")).await;
+    assert!(page.contains("invalid"), "{page}");
+}
