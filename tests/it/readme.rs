@@ -588,3 +588,35 @@ fn the_readme_numpy_robot_example_runs_as_written() {
     let out = sh(dir.path(), &rest.join("\n"), &[]);
     assert!(out.contains("Task complete! Score:"), "{out}");
 }
+
+/// The README's Python 2.7 runtime: pyenv's 2.7, a virtualenv and numpy 1.16 from the
+/// package index, and a Python-2-only robot.py played through it, as written.
+#[test]
+fn the_readme_python_27_runtime_recipe_runs_as_written() {
+    let block = blocks("Testing a bot locally")
+        .into_iter()
+        .find(|b| b.contains("virtualenv<20.22"))
+        .expect("the Python 2.7 recipe");
+    let home = std::env::var("PYENV_ROOT")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|_| {
+            std::path::PathBuf::from(std::env::var("HOME").unwrap()).join(".pyenv")
+        });
+    if !home.join("versions/2.7.18/bin/python").exists() {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true and pyenv's Python 2.7.18 is missing"
+        );
+        eprintln!("SKIPPED the README's Python 2.7 recipe: no pyenv 2.7.18");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for link in ["bots", "mazes", "tests"] {
+        std::os::unix::fs::symlink(root().join(link), dir.path().join(link)).unwrap();
+    }
+    // Its own folder for the runtime, so that runs at once do not meet.
+    let venv = dir.path().join("py27");
+    let block = block.replace("/tmp/py27", venv.to_str().unwrap());
+    let out = sh(dir.path(), &block, &[]);
+    assert!(out.contains("Task complete! Score:"), "{out}");
+}
