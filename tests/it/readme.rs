@@ -133,18 +133,28 @@ async fn the_readme_server_examples_run_as_written_on_a_fresh_server() {
         }
         for command in commands(&block) {
             let command = command.replace("localhost:8080", &addr);
-            let out = sh(&work, &command, &[("ADMIN", ADMIN), ("TOKEN", &token)]);
+            // The commands share what they set, as in one terminal: $TOKEN is set by
+            // the README itself (the admin token is the one its serve line exports).
+            let out = sh(
+                &work,
+                &format!("{command}\necho \"__TOKEN=$TOKEN\""),
+                &[("ADMIN", ADMIN), ("TOKEN", &token)],
+            );
+            if let Some(t) = out
+                .lines()
+                .find_map(|l| l.strip_prefix("__TOKEN="))
+                .filter(|t| !t.is_empty())
+            {
+                token = t.to_string();
+            }
             assert!(
                 !out.contains("\"error\":{"),
                 "README command answered an error:\n{command}\n{out}"
             );
-            if let Some(t) = out
-                .split("\"owner_token\":\"")
-                .nth(1)
-                .filter(|_| token.is_empty())
-            {
-                token = t.split('"').next().unwrap().to_string();
-            }
+            assert!(
+                !command.contains("$TOKEN") || !token.is_empty(),
+                "the README uses $TOKEN before it sets it: {command}"
+            );
             ran += 1;
             settle(&server).await;
         }
