@@ -243,9 +243,26 @@ pub async fn edit(
         None => c.freeze_ms.map(|ms| ms as f64 / 3_600_000.0),
     };
     check_schedule(Timestamp(opens), Timestamp(closes), freeze_hours).map_err(invalid)?;
+    let old_freeze = timeline(&c).and_then(|t| t.frozen_from());
+    let old_close = c.closes_at.unwrap_or(0);
     c.opens_at = Some(opens);
     c.closes_at = Some(closes);
     c.freeze_ms = freeze_hours.map(|h| (h * 3_600_000.0).round() as i64);
+    // A close moved earlier never freezes the board in the past: a board frozen
+    // already stays frozen from when it froze, and one not frozen yet freezes at the
+    // earliest now (a close moved to now: not before the close).
+    if closes < old_close
+        && patch.freeze_hours.is_none()
+        && let (Some(freeze), Some(new)) = (c.freeze_ms, timeline(&c).and_then(|t| t.frozen_from()))
+    {
+        let start = match old_freeze {
+            Some(old) if old <= now => old,
+            _ => new.max(now),
+        };
+        if start != new {
+            c.freeze_ms = Some((closes - start).clamp(0, freeze));
+        }
+    }
     let counts = [
         (
             "versions_per_day",
@@ -1151,6 +1168,38 @@ mod tests {
                 public: vec![maze(7002)],
                 private: vec![maze(7003), maze(7004)],
             },
+        }
+    }
+
+    /// A close moved earlier never freezes the public board in the past: moved to now,
+    /// the board shows what it showed (no freeze before the close); a board frozen
+    /// already stays frozen from the same instant.
+    #[tokio::test]
+    async fn shortening_a_competition_never_freezes_its_board_retroactively() {
+        for (db, _guard) in backends().await {
+            let now = now_ms();
+            let mut s = spec(now);
+            s.closes_at = Timestamp(now + 48 * 3_600_000);
+            s.freeze_hours = Some(24.0);
+            let c = create(&db, s, None).await.unwrap();
+            let frozen_from = |c: &CompetitionRow| timeline(c).and_then(|t| t.frozen_from());
+            assert_eq!(frozen_from(&c), Some(now + 24 * 3_600_000));
+            let patch = Patch {
+                closes_at: Some(Timestamp(now)),
+                ..Patch::default()
+            };
+            let closed = edit(&db, c.clone(), patch, now).await.unwrap();
+            assert_eq!(closed.closes_at, Some(now));
+            assert!(frozen_from(&closed).unwrap() >= now, "{closed:?}");
+            // Frozen already (the close 12 hours away, frozen for 12): closing in an
+            // hour keeps the freeze where it was.
+            let later = now + 36 * 3_600_000;
+            let patch = Patch {
+                closes_at: Some(Timestamp(later + 3_600_000)),
+                ..Patch::default()
+            };
+            let moved = edit(&db, c, patch, later).await.unwrap();
+            assert_eq!(frozen_from(&moved), Some(now + 24 * 3_600_000));
         }
     }
 
