@@ -419,13 +419,17 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                 if let Some(log) = log["build_log"].as_str() {
                     eprintln!("--- build log ---\n{}", show::log(log.trim_end()));
                 }
-                if status == "invalid" {
-                    bail!(
+                let message = if status == "invalid" {
+                    format!(
                         "version {version} is invalid: it failed its validation match (see the log above); \
                          it will not play and does not count against your quota ({page})"
                     )
-                }
-                bail!("version {version} failed to build: it will not play ({page})")
+                } else {
+                    format!("version {version} failed to build: it will not play ({page})")
+                };
+                // Exit status 1: the upload worked, the version does not (2 is for a
+                // command that could not do its work).
+                Err(super::ExitWith { code: 1, message }.into())
             }
             other => bail!("version {version}: {}", text(other)),
         }

@@ -98,6 +98,26 @@ pub fn sandbox_exec_if_asked() -> Option<std::process::ExitCode> {
 /// Bad arguments, unreadable or invalid mazes, or output that cannot be written.
 pub fn run() -> anyhow::Result<()> {
     let cli = Cli::parse();
+    // Commands that only print what they read end quietly when their reader goes away
+    // (`mazearena logs ID | head`), as other command-line tools do, instead of failing
+    // on the broken pipe. Not the ones that run bots: a bot that closes its stdin must
+    // not end the referee.
+    if matches!(
+        cli.command,
+        Command::Maze(_)
+            | Command::Replay(_)
+            | Command::Match(_)
+            | Command::Competition(_)
+            | Command::Status(_)
+            | Command::Matches(_)
+            | Command::Logs(_)
+            | Command::Practice(_)
+    ) {
+        // SAFETY: called at the start of the program, before any thread is made.
+        unsafe {
+            libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        }
+    }
     match cli.command {
         Command::Run(args) => run::run(args),
         Command::Maze(cmd) => maze::run(cmd),

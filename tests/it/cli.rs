@@ -897,3 +897,23 @@ fn run_reports_a_sandbox_that_does_not_work_not_a_crashed_bot() {
         out.stdout
     );
 }
+
+/// A command that prints what it reads ends quietly when its reader has gone
+/// (`mazearena logs ID | head`): killed by SIGPIPE as other tools are, no panic.
+#[test]
+fn a_reader_that_goes_away_ends_a_printing_command_quietly() {
+    let out = std::process::Command::new("bash")
+        .args([
+            "-c",
+            &format!(
+                "{{ sleep 0.3; '{}' maze generate --dim 16; }} | true; echo \"status ${{PIPESTATUS[0]}}\"",
+                env!("CARGO_BIN_EXE_mazearena")
+            ),
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stdout.contains("status 141"), "{stdout} {stderr}");
+}

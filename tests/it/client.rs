@@ -723,6 +723,11 @@ async fn a_python_2_robot_submitted_with_python3_is_invalid_at_upload_with_its_s
     let env = [("MAZEARENA_SERVER", server.base.as_str())];
     let out = client(&config, &["submit", bot.to_str().unwrap()], &env);
     let said = failed(&out, "submitting a Python 2 robot with python3");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "a version that cannot play exits 1"
+    );
     assert!(said.contains("SyntaxError"), "{said}");
     assert!(said.contains("is this Python 2?"), "{said}");
     assert!(said.contains("version 1 is invalid"), "{said}");
