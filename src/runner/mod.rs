@@ -248,6 +248,9 @@ pub async fn run_match(
     stderr_to_last_step(&mut record, std::mem::take(&mut ended.late_stderr));
     if let Some((_, mut f)) = failure {
         (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);
+        if record.status == MatchStatus::Crashed && f.reason.starts_with(session::CLOSED_STDOUT) {
+            f.reason = ended_reason(&f, &ended.stderr_tail);
+        }
         if let Some(reason) = setup_failure(&ended, sandbox) {
             // The jail could not start the bot's program: it never ran.
             f.reason = format!("could not start the bot: {reason}");
@@ -270,6 +273,34 @@ fn stderr_to_last_step(record: &mut MatchRecord, lines: Vec<String>) {
     }
     if let Some(step) = record.trace.last_mut() {
         trace::attach_stderr(step, lines, &mut record.notices);
+    }
+}
+
+/// Why a bot that stopped answering crashed, in its own terms: its exit status or the
+/// signal that killed it, and the last line it wrote on stderr (for a Python bot, its
+/// exception: "ZeroDivisionError: division by zero").
+fn ended_reason(f: &Failure, stderr_tail: &str) -> String {
+    let how = match (f.exit_code, f.signal) {
+        (Some(code), _) => format!("exited with status {code}"),
+        (None, Some(signal)) => format!("was killed by signal {signal}"),
+        (None, None) => "closed its stdout".to_string(),
+    };
+    let step = f
+        .step
+        .map_or_else(String::new, |s| format!(" before answering step {s}"));
+    let last: String = stderr_tail
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .unwrap_or("")
+        .chars()
+        .take(200)
+        .collect();
+    if last.is_empty() {
+        format!("the bot {how}{step}")
+    } else {
+        format!("the bot {how}{step}: {last}")
     }
 }
 

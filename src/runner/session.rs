@@ -34,6 +34,10 @@ const NEAR_WAIT: Duration = Duration::from_millis(2);
 /// lease renewal, a shutdown) while every answer comes within [`NEAR_WAIT`].
 const TURN_EVERY: Duration = Duration::from_millis(10);
 
+/// The start of the reason for a bot that stopped answering (rewritten with its exit
+/// status and last stderr line once it has ended).
+pub const CLOSED_STDOUT: &str = "the bot closed its stdout (or exited)";
+
 /// Added to a timeout at step 1: the usual cause is an answer left in an output buffer.
 pub const STARTUP_HINT: &str = " (if the bot did print an answer, it may still sit in its output buffer: \
      flush stdout after every line, e.g. fflush(stdout) in C or print(..., flush=True) in Python; \
@@ -241,10 +245,7 @@ impl Session {
         match waited {
             Waited::Got(Ok(framing::Next::Line)) => self.answer(since, sense.step, allowed_us),
             Waited::Got(Ok(framing::Next::End)) => {
-                let reason = format!(
-                    "the bot closed its stdout (or exited) before answering step {}",
-                    sense.step
-                );
+                let reason = format!("{CLOSED_STDOUT} before answering step {}", sense.step);
                 self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
             }
             Waited::Got(Ok(framing::Next::TooLong)) => protocol_fault(

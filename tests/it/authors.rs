@@ -232,7 +232,7 @@ fn a_tournament_says_why_a_bot_failed_and_match_show_shows_it() {
         "{text}"
     );
     assert!(
-        text.contains("reason (step 1): the bot closed its stdout"),
+        text.contains("reason (step 1): the bot exited with status 3 before answering step 1"),
         "{text}"
     );
     assert!(
