@@ -78,7 +78,11 @@ pub fn offered(runtimes: &[Runtime]) -> String {
     if runtimes.is_empty() {
         "it lists none".into()
     } else {
-        let names: Vec<String> = runtimes.iter().map(name_of).collect();
+        let names: Vec<String> = runtimes
+            .iter()
+            .filter(|r| !r.base_of_venv)
+            .map(name_of)
+            .collect();
         format!("it offers {}", names.join(", "))
     }
 }
@@ -86,7 +90,7 @@ pub fn offered(runtimes: &[Runtime]) -> String {
 /// Describes the operator's `runtimes` and the system's programs.
 pub async fn probe(runtimes: &[Runtime]) -> Vec<RuntimeInfo> {
     let mut out = Vec::new();
-    for r in runtimes {
+    for r in runtimes.iter().filter(|r| !r.base_of_venv) {
         let bin = r.prefix.join("bin");
         let (languages, programs) = programs_in(&[bin]).await;
         out.push(RuntimeInfo {

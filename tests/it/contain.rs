@@ -410,11 +410,13 @@ async fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_ru
         .iter()
         .map(|r| r["name"].as_str().unwrap())
         .collect();
-    // The two venvs in the operator's order (their base interpreter, which they bring,
-    // after them), the system's last.
+    // The two venvs in the operator's order, the system's last, and nothing else: the
+    // base interpreter the venvs bring is mounted for them, not offered as a runtime of
+    // its own (its site-packages are the operator's).
     let at = |n: &str| names.iter().position(|x| *x == n);
     assert!(at("plain") < at("sci") && at("sci").is_some(), "{names:?}");
     assert_eq!(names.last(), Some(&"system"), "{names:?}");
+    assert_eq!(names.len(), 3, "{names:?}");
     let sci = &offered[at("sci").unwrap()];
     // No path of the server's in what it says.
     assert!(!offered.to_string().contains("/tmp/"), "{offered}");

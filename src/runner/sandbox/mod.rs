@@ -522,7 +522,7 @@ impl FullSandbox {
         if let Some(name) = preferred {
             let at = all
                 .iter()
-                .position(|r| super::runtimes::name_of(r) == name)
+                .position(|r| !r.base_of_venv && super::runtimes::name_of(r) == name)
                 .ok_or_else(|| {
                     format!(
                         "the bot asks for runtime {name:?}, which this server does not offer ({})",

@@ -74,6 +74,21 @@ pub struct Runtime {
     pub prefix: PathBuf,
     /// Why it is in the view, for `mazearena doctor`.
     pub why: String,
+    /// The base interpreter of a listed venv: mounted, because the venv's programs run
+    /// it, but not a runtime of its own: not offered by name, not listed, not on the
+    /// bot's `PATH` (its site-packages are the operator's, not the venv's).
+    pub base_of_venv: bool,
+}
+
+impl Runtime {
+    /// An install folder mounted for bots and offered to them.
+    pub fn offered(prefix: PathBuf, why: impl Into<String>) -> Runtime {
+        Runtime {
+            prefix,
+            why: why.into(),
+            base_of_venv: false,
+        }
+    }
 }
 
 /// The environment of a bot in the sandbox, all of the runner's making: a `PATH` of its
@@ -83,6 +98,7 @@ pub struct Runtime {
 pub fn bot_env(runtimes: &[Runtime]) -> Vec<(String, String)> {
     let mut path: Vec<String> = runtimes
         .iter()
+        .filter(|r| !r.base_of_venv)
         .map(|r| r.prefix.join("bin"))
         .filter(|b| b.is_dir())
         .map(|b| b.to_string_lossy().into_owned())
@@ -183,10 +199,7 @@ pub fn runtime(dir: &Path, why: &str, hide: &[PathBuf]) -> Result<Vec<Runtime>, 
             dir.display()
         ));
     }
-    let mut out = vec![Runtime {
-        prefix: prefix.clone(),
-        why: why.to_string(),
-    }];
+    let mut out = vec![Runtime::offered(prefix.clone(), why)];
     // A venv runs its base interpreter: `home = /x/bin` in its pyvenv.cfg.
     if let Ok(cfg) = std::fs::read_to_string(prefix.join("pyvenv.cfg")) {
         let home = cfg.lines().find_map(|l| {
@@ -209,6 +222,7 @@ pub fn runtime(dir: &Path, why: &str, hide: &[PathBuf]) -> Result<Vec<Runtime>, 
                 out.push(Runtime {
                     prefix: base,
                     why: format!("base interpreter of the venv {}", prefix.display()),
+                    base_of_venv: true,
                 });
             }
         }

@@ -547,10 +547,7 @@ mod tests {
         assert!(!plan_of(&sandbox(true, false, true), &[]));
         assert!(!plan_of(&sandbox(true, true, false), &[]));
         // A runtime under /tmp lives in the scratch area, made anew for each match.
-        let in_tmp = Runtime {
-            prefix: "/tmp/venv".into(),
-            why: "test".into(),
-        };
+        let in_tmp = Runtime::offered("/tmp/venv".into(), "test");
         assert!(!plan_of(&sandbox(true, true, true), &[in_tmp]));
         // An entry that is a link, and a folder the match's uid cannot pass through.
         std::os::unix::fs::symlink("a.py", dir.join("c.py")).unwrap();
