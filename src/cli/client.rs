@@ -735,6 +735,14 @@ pub fn logs(args: LogsArgs) -> anyhow::Result<()> {
         if let Some(e) = log.get("error").filter(|e| !e.is_null()) {
             if let Some(reason) = e["reason"].as_str() {
                 println!("reason: {}", text(reason));
+                // A crash's own words (a Python exception's line) are its stderr's last.
+                if log["status"] == "crashed"
+                    && let Some(last) = log["stderr_tail"]
+                        .as_str()
+                        .and_then(|t| t.lines().rev().map(str::trim).find(|l| !l.is_empty()))
+                {
+                    println!("its last stderr line: {}", text(last));
+                }
             } else {
                 println!("error: {}", show::value(e));
             }

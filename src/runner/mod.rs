@@ -249,7 +249,7 @@ pub async fn run_match(
     if let Some((_, mut f)) = failure {
         (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);
         if record.status == MatchStatus::Crashed && f.reason.starts_with(session::CLOSED_STDOUT) {
-            f.reason = ended_reason(&f, &ended.stderr_tail);
+            f.reason = ended_reason(&f);
         }
         if let Some(reason) = setup_failure(&ended, sandbox) {
             // The jail could not start the bot's program: it never ran.
@@ -276,10 +276,10 @@ fn stderr_to_last_step(record: &mut MatchRecord, lines: Vec<String>) {
     }
 }
 
-/// Why a bot that stopped answering crashed, in its own terms: its exit status or the
-/// signal that killed it, and the last line it wrote on stderr (for a Python bot, its
-/// exception: "ZeroDivisionError: division by zero").
-fn ended_reason(f: &Failure, stderr_tail: &str) -> String {
+/// Why a bot that stopped answering crashed: its exit status or the signal that killed
+/// it. (Not its stderr, which is its owner's: the reason is public. The owner's log
+/// view ends with its last stderr lines, a Python exception among them.)
+fn ended_reason(f: &Failure) -> String {
     let how = match (f.exit_code, f.signal) {
         (Some(code), _) => format!("exited with status {code}"),
         (None, Some(signal)) => format!("was killed by signal {signal}"),
@@ -288,20 +288,7 @@ fn ended_reason(f: &Failure, stderr_tail: &str) -> String {
     let step = f
         .step
         .map_or_else(String::new, |s| format!(" before answering step {s}"));
-    let last: String = stderr_tail
-        .lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| !l.is_empty())
-        .unwrap_or("")
-        .chars()
-        .take(200)
-        .collect();
-    if last.is_empty() {
-        format!("the bot {how}{step}")
-    } else {
-        format!("the bot {how}{step}: {last}")
-    }
+    format!("the bot {how}{step}")
 }
 
 /// The bot's exit code or signal. In the sandbox the process is bubblewrap, which exits

@@ -430,15 +430,18 @@ async fn play_a_competition(server: &TestServer) {
         .get(&format!("/api/tournaments/{public_t}"), Some(&organiser))
         .await;
     assert_eq!(t["standings"].as_array().map(Vec::len), Some(3), "{t}");
-    assert_eq!(
-        server.get_text(&format!("/?tournament={public_t}")).await.0,
-        409
-    );
+    // The competition's tournament on the home page leads to the competition's page
+    // (its standings are the competition's boards), and the home page shows the
+    // competition's public board as its page does: means and ranks, no interval.
+    let (s, page) = server.get_text(&format!("/?tournament={public_t}")).await;
+    assert_eq!(s, 200, "{page}");
+    assert!(page.contains("Class of 2027"), "{page}");
     let (_, home) = server.get_text("/").await;
     assert!(
-        !home.contains("ada-bot"),
-        "the home page shows a competition's standings: {home}"
+        home.contains("href=\"/competitions/class-2027\"") && home.contains("ada-bot"),
+        "the home page leaves the competition out: {home}"
     );
+    assert!(!home.contains("/?tournament={public_t}"), "{home}");
     // Frozen from now on (2 hours before a close 1 hour away): a version uploaded now
     // shows on the public board to the organisers, not to anyone else.
     let (s, v) = call(

@@ -2,7 +2,7 @@
 //! on, else the standings over all mazes, with the latest tournament beside it.
 
 use axum::extract::State;
-use axum::response::Html;
+use axum::response::{Html, IntoResponse, Redirect, Response};
 use serde::Deserialize;
 
 use super::super::AppState;
@@ -26,7 +26,7 @@ pub(super) struct BoardQuery {
 pub(super) async fn leaderboard_page(
     State(state): State<AppState>,
     AppQuery(q): AppQuery<BoardQuery>,
-) -> ApiResult<Html<String>> {
+) -> ApiResult<Response> {
     let sort = match q.sort.as_deref() {
         None => SortKey::Rank,
         Some(s) => SortKey::parse(s).ok_or_else(|| {
@@ -71,11 +71,17 @@ pub(super) async fn leaderboard_page(
                 .await?
                 .filter(|t| !t.sealed)
                 .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+            // A competition's tournament: its standings are the competition's boards.
             if let Some(c) = t.competition_id {
-                return Err(super::super::leaderboard::competition_standings_elsewhere(
-                    state, id, c,
-                )
-                .await?);
+                return match state.storage.get_competition_by_id(c).await? {
+                    Some(c) => {
+                        Ok(Redirect::to(&format!("/competitions/{}", c.name)).into_response())
+                    }
+                    None => Err(super::super::leaderboard::competition_standings_elsewhere(
+                        state, id, c,
+                    )
+                    .await?),
+                };
             }
             (Scope::Tournament(id), board(Scope::Tournament(id)).await?)
         }
@@ -159,7 +165,40 @@ pub(super) async fn leaderboard_page(
             scope == Scope::All,
         ),
     ];
-    for t in tournaments.iter().take(5) {
+    // Competitions have their own pages: a chip and their public board (as anyone sees
+    // it there), not their tournaments' standings.
+    let now = crate::storage::now_ms();
+    let mut competitions = Vec::new();
+    for c in state.storage.list_competitions().await? {
+        if c.kind == "default" {
+            continue;
+        }
+        let board = crate::registry::competitions::board(
+            &state.storage,
+            &c,
+            crate::registry::competitions::BoardKind::Public,
+            false,
+            now,
+        )
+        .await?;
+        tabs.push((c.title.clone(), format!("/competitions/{}", c.name), false));
+        let phase = crate::registry::competitions::phase(&c, now);
+        competitions.push(web::CompetitionBoard {
+            name: c.name,
+            title: c.title,
+            phase: phase.as_str().to_string(),
+            lines: board
+                .standings
+                .into_iter()
+                .take(COMPETITION_LINES)
+                .collect(),
+        });
+    }
+    for t in tournaments
+        .iter()
+        .filter(|t| t.competition_id.is_none())
+        .take(5)
+    {
         tabs.push((
             t.name.clone(),
             format!("/?tournament={}", t.tournament_id),
@@ -170,11 +209,16 @@ pub(super) async fn leaderboard_page(
         main: section(heading, note, rows, query, sort),
         latest,
         tabs,
+        competitions,
         tournaments,
         mazes,
         runtimes: state.runtimes.as_ref().clone(),
-    })))
+    }))
+    .into_response())
 }
+
+/// How many lines of each competition's public board the home page shows.
+const COMPETITION_LINES: usize = 10;
 
 pub(super) fn section(
     heading: String,

@@ -92,12 +92,27 @@ pub struct LeaderboardPage {
     pub latest: Option<(TournamentRow, StandingsSection)>,
     /// Scope tabs: label, link, active.
     pub tabs: Vec<(String, String, bool)>,
+    /// The competitions' public boards (their first lines), as their pages show them.
+    pub competitions: Vec<CompetitionBoard>,
     /// Recent tournaments.
     pub tournaments: Vec<TournamentRow>,
     /// Every maze (hidden ones by name only).
     pub mazes: Vec<MazeRow>,
     /// The runtimes bots may use here.
     pub runtimes: Vec<crate::runner::runtimes::RuntimeInfo>,
+}
+
+/// A competition's public board on the home page.
+#[derive(Debug, Clone)]
+pub struct CompetitionBoard {
+    /// Its name (its page's address).
+    pub name: String,
+    /// Its title.
+    pub title: String,
+    /// Its phase.
+    pub phase: String,
+    /// The first lines of its public board.
+    pub lines: Vec<crate::registry::competitions::BoardLine>,
 }
 
 pub(super) fn standings_table(s: &StandingsSection) -> Markup {
@@ -160,6 +175,11 @@ pub fn leaderboard(p: &LeaderboardPage) -> String {
             }
         }
         (standings_table(&p.main))
+        @for c in &p.competitions {
+            h2 { "Competition: " a href={ "/competitions/" (c.name) } { (c.title) } " " span.muted { "(" (c.phase) ")" } }
+            p.muted { "Its public board, as on " a href={ "/competitions/" (c.name) } { "its page" } " (the first lines)." }
+            (super::competitions::board_table(&c.lines))
+        }
         @if let Some((t, section)) = &p.latest {
             h2 { "Latest tournament: " a href={ "/tournaments/" (t.tournament_id) } { (t.name) } }
             p.muted { (t.done) " of " (t.total) " matches played" }

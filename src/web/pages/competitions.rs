@@ -94,7 +94,7 @@ fn phase_badge(c: &CompetitionSummary) -> Markup {
     html! { span class={ "status " (class) } { (word) } }
 }
 
-fn board_table(lines: &[BoardLine]) -> Markup {
+pub(super) fn board_table(lines: &[BoardLine]) -> Markup {
     html! {
         @if lines.is_empty() { p.muted { "No entrant has a version with all its matches played yet." } } @else {
             table.data.board {

@@ -11,7 +11,7 @@ mod detail;
 mod lists;
 mod ranks;
 
-pub use board::{LeaderboardPage, SortKey, StandingsSection, leaderboard};
+pub use board::{CompetitionBoard, LeaderboardPage, SortKey, StandingsSection, leaderboard};
 pub use competitions::{
     CompetitionPage, CompetitionSummary, MY_SUBMISSIONS_JS, competition, competitions,
 };
