@@ -442,6 +442,15 @@ async fn play_a_competition(server: &TestServer) {
         "the home page leaves the competition out: {home}"
     );
     assert!(!home.contains("/?tournament={public_t}"), "{home}");
+    // The tournament's own page says where its standings are, instead of promising
+    // them for later.
+    let (_, page) = server.get_text(&format!("/tournaments/{public_t}")).await;
+    assert!(
+        page.contains("ranks for the competition")
+            && page.contains("href=\"/competitions/class-2027\"")
+            && !page.contains("The standings appear once"),
+        "{page}"
+    );
     // Frozen from now on (2 hours before a close 1 hour away): a version uploaded now
     // shows on the public board to the organisers, not to anyone else.
     let (s, v) = call(

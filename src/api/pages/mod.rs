@@ -293,6 +293,14 @@ async fn tournament_page(
         t.competition_id.is_some(),
         false,
     );
+    let competition = match t.competition_id {
+        Some(c) => state
+            .storage
+            .get_competition_by_id(c)
+            .await?
+            .map(|c| (c.name, c.title)),
+        None => None,
+    };
     let mut bots: Vec<(i64, String)> = Vec::new();
     let mut mazes: Vec<(i64, String)> = Vec::new();
     let mut cells: BTreeMap<(i64, i64), web::Cell> = BTreeMap::new();
@@ -342,5 +350,6 @@ async fn tournament_page(
         mazes,
         cells,
         standings_sealed: sealed,
+        competition,
     })))
 }

@@ -178,6 +178,9 @@ pub struct TournamentPage {
     pub cells: std::collections::BTreeMap<(i64, i64), Cell>,
     /// True while the standings are withheld (hidden mazes, not complete).
     pub standings_sealed: bool,
+    /// The competition it ranks for (name, title): its standings are that
+    /// competition's boards.
+    pub competition: Option<(String, String)>,
 }
 
 /// One bot x maze cell of a tournament.
@@ -214,7 +217,9 @@ pub fn tournament(p: &TournamentPage) -> String {
             p #progress-text { (t.done) " of " (t.total) " matches played" }
         }
         h2 { "Standings" }
-        @if p.standings_sealed {
+        @if let Some((name, title)) = &p.competition {
+            p.muted { "This tournament ranks for the competition " a href={ "/competitions/" (name) } { (title) } ": its standings are the competition's boards, on its page (each entrant's latest version whose matches are all played, under the competition's freeze)." }
+        } @else if p.standings_sealed {
             p.muted { "The standings appear once every match is played: the tournament has hidden mazes, and standings that change with each match would show that match's result." }
         } @else {
             (standings_table(&p.standings))
@@ -222,7 +227,7 @@ pub fn tournament(p: &TournamentPage) -> String {
         h2 { "Bot x maze" }
         p.muted { "Mean score of the finished matches, and how many finished; a cell links to one of its matches (a failed one first)." }
         table.data.grid {
-            thead { tr { th { "bot" } @for (id, name) in &p.mazes { th { a href={ "/mazes/" (id) } { (name) } } } } }
+            thead { tr { th { "bot" } @for (id, name) in &p.mazes { th.num { a href={ "/mazes/" (id) } { (name) } } } } }
             tbody {
                 @for (bot_id, bot) in &p.bots {
                     tr {
