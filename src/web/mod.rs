@@ -10,3 +10,6 @@ pub mod layout;
 pub mod pages;
 pub mod policy;
 pub mod viewer;
+
+/// The site's icon.
+pub const FAVICON_SVG: &str = include_str!("assets/favicon.svg");

@@ -137,6 +137,24 @@ impl Browser {
         self.client.source().await.unwrap()
     }
 
+    /// Sets the window's size in CSS pixels (a phone: 375 x 800).
+    pub async fn window(&self, width: u32, height: u32) {
+        self.client.set_window_size(width, height).await.unwrap();
+    }
+
+    /// How many CSS pixels the page is wider than the window (0: no sideways scroll).
+    pub async fn overflow_x(&self) -> i64 {
+        self.client
+            .execute(
+                "return document.documentElement.scrollWidth - window.innerWidth;",
+                vec![],
+            )
+            .await
+            .unwrap()
+            .as_i64()
+            .unwrap()
+    }
+
     /// Saves a screenshot under `target/browser-artifacts/NAME.png`.
     pub async fn screenshot(&self, name: &str) {
         let png = self.client.screenshot().await.unwrap();

@@ -364,6 +364,34 @@ async fn pages_and_the_match_viewer_in_a_real_browser() {
     }
     b.screenshot("match-page-owner-stderr").await;
 
+    // At a phone's width no page scrolls sideways (wide tables scroll in their own box),
+    // and every page names its icon, which the server has.
+    b.window(375, 800).await;
+    for path in [
+        "/".to_string(),
+        "/bots".into(),
+        format!("/bots/{broken}"),
+        "/mazes".into(),
+        "/matches".into(),
+        format!("/matches/{tm}"),
+        "/tournaments".into(),
+        "/competitions".into(),
+        "/workers".into(),
+    ] {
+        b.open(&format!("{}{path}", server.base), "header.site")
+            .await;
+        let over = b.overflow_x().await;
+        if over > 0 {
+            b.screenshot(&format!("phone{}", path.replace('/', "-")))
+                .await;
+        }
+        assert!(over <= 0, "{path} scrolls sideways by {over} px at 375 px");
+        assert!(b.source().await.contains("rel=\"icon\""), "{path}");
+    }
+    let (s, _, headers) = server.get_raw("/favicon.ico", None).await;
+    assert_eq!(s, 200);
+    assert_eq!(headers["content-type"], "image/svg+xml");
+
     let _ = token;
     b.quit().await;
 }
@@ -529,6 +557,20 @@ async fn a_competition_page_shows_an_entrants_submissions_in_a_real_browser() {
     }
     let row = b.text("table.submissions tbody tr").await;
     assert!(row.contains("ranked") && row.contains("1/1"), "{row}");
+    // The version's public rank is a real one (1 of 1 here), not 0.
+    let cells: Vec<String> = row.split_whitespace().map(str::to_string).collect();
+    assert!(!cells.iter().any(|c| c == "0"), "{row}");
     b.screenshot("competition-page").await;
+    // At a phone's width the competition's page does not scroll sideways.
+    b.window(375, 800).await;
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    let over = b.overflow_x().await;
+    if over > 0 {
+        b.screenshot("phone-competition").await;
+    }
+    assert!(
+        over <= 0,
+        "the competition page scrolls sideways by {over} px"
+    );
     b.quit().await;
 }

@@ -44,6 +44,19 @@ pub(super) fn router() -> Router<AppState> {
         .route("/tournaments", get(tournaments_page))
         .route("/tournaments/{id}", get(tournament_page))
         .route("/workers", get(workers_page))
+        .route("/favicon.svg", get(favicon))
+        .route("/favicon.ico", get(favicon))
+}
+
+/// The site's icon (an SVG, also for browsers that ask for `/favicon.ico`).
+async fn favicon() -> impl axum::response::IntoResponse {
+    (
+        [
+            (axum::http::header::CONTENT_TYPE, "image/svg+xml"),
+            (axum::http::header::CACHE_CONTROL, "public, max-age=86400"),
+        ],
+        crate::web::FAVICON_SVG,
+    )
 }
 
 async fn bots_page(State(state): State<AppState>) -> ApiResult<Html<String>> {

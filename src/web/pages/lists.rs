@@ -104,12 +104,22 @@ impl Pager {
         format!("{}{sep}offset={offset}&limit={}", self.base, self.limit)
     }
 
+    /// Which rows are shown, counted from 1: "1–50 of 120", "3 of 3", "none".
+    fn shown(&self, shown_to: i64) -> String {
+        let from = self.offset + 1;
+        match self.total {
+            0 => "none".into(),
+            total if from >= shown_to => format!("{} of {total}", shown_to.max(from.min(total))),
+            total => format!("{from}–{shown_to} of {total}"),
+        }
+    }
+
     /// The links.
     pub fn links(&self) -> Markup {
         let shown_to = (self.offset + self.limit).min(self.total);
         html! {
             div.pager {
-                span.muted { (self.offset.min(self.total)) "–" (shown_to) " of " (self.total) }
+                span.muted { (self.shown(shown_to)) }
                 @if self.offset > 0 {
                     a rel="prev" href=(self.href((self.offset - self.limit).max(0))) { "← newer" }
                 }
@@ -233,8 +243,19 @@ mod tests {
             total: 120,
         };
         let html = p.links().into_string();
+        assert!(html.contains("51–100 of 120"), "{html}");
         assert!(html.contains("/matches?bot_id=2&amp;offset=0&amp;limit=50"));
         assert!(html.contains("/matches?bot_id=2&amp;offset=100&amp;limit=50"));
+        // Counted from 1: one row is "1 of 1", not "0-1 of 1"; none is "none".
+        let one = Pager {
+            base: "/bots".into(),
+            offset: 0,
+            limit: 50,
+            total: 1,
+        };
+        assert!(one.links().into_string().contains(">1 of 1<"));
+        let none = Pager { total: 0, ..one };
+        assert!(none.links().into_string().contains(">none<"));
     }
 
     #[test]
