@@ -356,9 +356,9 @@ async fn enter(
     }
     if ops::phase(&c, now_ms()).is_closed() {
         return Err(ApiError::Conflict(format!(
-            "competition {} closed at {} UTC",
+            "competition {} closed at {}",
             c.name,
-            Timestamp(c.closes_at.unwrap_or(0)).rfc3339()
+            Timestamp(c.closes_at.unwrap_or(0)).words()
         )));
     }
     let bot = state
@@ -686,9 +686,9 @@ async fn final_results(
                 c.name, p.played, p.total
             ),
             (Some(t), None) => format!(
-                "the results of competition {} come after its close ({} UTC) and its final run",
+                "the results of competition {} come after its close ({}) and its final run",
                 c.name,
-                Timestamp(t).rfc3339()
+                Timestamp(t).words()
             ),
             (None, None) => "the default competition has no final results".into(),
         }));

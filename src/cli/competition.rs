@@ -267,8 +267,7 @@ async fn print_line(storage: &Storage, c: &CompetitionRow) -> anyhow::Result<()>
     let phase = ops::phase(c, crate::storage::now_ms());
     let mazes = storage.competition_mazes(c.competition_id).await?;
     let count = |set: &str| mazes.iter().filter(|m| m.maze_set == set).count();
-    let when =
-        |t: Option<i64>| t.map_or("-".to_string(), |t| format!("{} UTC", Timestamp(t).words()));
+    let when = |t: Option<i64>| t.map_or("-".to_string(), |t| Timestamp(t).words());
     println!(
         "{}: {:?}{} \"{}\"; opens {}, closes {}; mazes: {} practice, {} public, {} private",
         c.name,
@@ -467,7 +466,7 @@ async fn wait_for_results(
                     p.total
                 ),
                 None => bail!(
-                    "competition {name} has no results yet (they come after its close, {} UTC, and its final run)",
+                    "competition {name} has no results yet (they come after its close, {}, and its final run)",
                     c.closes_at.map_or("never".into(), |t| Timestamp(t).words())
                 ),
             }

@@ -38,11 +38,12 @@ impl Timestamp {
         }
     }
 
-    /// For people: `2027-03-01 14:00` (UTC).
+    /// For people, the one way times are written on pages and in messages:
+    /// `2027-03-01 14:00 UTC`.
     pub fn words(self) -> String {
         let (date, secs_of_day) = civil(self.0);
         format!(
-            "{date} {:02}:{:02}",
+            "{date} {:02}:{:02} UTC",
             secs_of_day / 3600,
             (secs_of_day % 3600) / 60
         )

@@ -110,7 +110,7 @@ impl Quota {
             format!("{used} of {limit} {what} used in the last 24 hours")
         };
         if let Some(next) = next_at {
-            message.push_str(&format!("; the next one at {} UTC", next.words()));
+            message.push_str(&format!("; the next one at {}", next.words()));
         }
         Quota {
             used,

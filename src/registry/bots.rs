@@ -157,8 +157,8 @@ pub async fn add_version(
             Err(super::competitions::quota_refusal(storage, full, now).await?)
         }
         Err(VersionRefusal::Closed { name, closes_at }) => Err(RegistryError::Conflict(format!(
-            "competition {name} closed at {} UTC: no new versions",
-            crate::competition::Timestamp(closes_at).rfc3339()
+            "competition {name} closed at {}: no new versions",
+            crate::competition::Timestamp(closes_at).words()
         ))),
     }
 }

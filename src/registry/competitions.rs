@@ -194,7 +194,7 @@ pub async fn edit(
         || patch.limits.is_some();
     if phase.is_closed() && rules_change {
         return Err(RegistryError::Conflict(format!(
-            "competition {} closed at {} UTC: only its title, description and rules can change",
+            "competition {} closed at {}: only its title, description and rules can change",
             c.name,
             Timestamp(c.closes_at.unwrap_or(0)).words()
         )));
@@ -400,9 +400,9 @@ pub async fn check_upload(
     for c in storage.competitions_of_bot(bot_id).await? {
         if phase(&c, now).is_closed() {
             return Ok(Err(UploadRefusal::Closed(format!(
-                "competition {} closed at {} UTC: no new versions",
+                "competition {} closed at {}: no new versions",
                 c.name,
-                Timestamp(c.closes_at.unwrap_or(0)).rfc3339()
+                Timestamp(c.closes_at.unwrap_or(0)).words()
             ))));
         }
         if let Some(entrant_id) = storage.entrant_of_entry(c.competition_id, bot_id).await? {

@@ -12,7 +12,7 @@ use crate::registry::competitions::{self as ops, BoardKind};
 use crate::web::pages::{self as web, CompetitionSummary};
 
 fn summary(v: &CompetitionView) -> CompetitionSummary {
-    let when = |t: Option<crate::competition::Timestamp>| t.map(|t| format!("{} UTC", t.words()));
+    let when = |t: Option<crate::competition::Timestamp>| t.map(|t| t.words());
     CompetitionSummary {
         name: v.name.clone(),
         title: v.title.clone(),

@@ -174,7 +174,7 @@ pub fn competition(p: &CompetitionPage) -> String {
             (ranks::ranking_note(rows.iter().map(|r| &r.uncertainty)))
         }
         h2 { "Public leaderboard" }
-        @if let Some(f) = &p.public.frozen_at { p.muted { "Frozen since " (f.words()) " UTC: versions uploaded later show after the close." } }
+        @if let Some(f) = &p.public.frozen_at { p.muted { "Frozen since " (f.words()) ": versions uploaded later show after the close." } }
         (board_table(&p.public.standings))
         @if let Some(private) = &p.private {
             h2 { "Private leaderboard" }
