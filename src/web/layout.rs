@@ -55,7 +55,7 @@ pub fn score(status: &str, s: Option<f64>) -> Markup {
     }
 }
 
-/// Unix milliseconds as a UTC date and time (`2026-11-23 12:34`).
+/// Unix milliseconds as a UTC date and time (`2026-11-23 12:34 UTC`).
 pub fn time(ms: i64) -> String {
     crate::competition::Timestamp(ms).words()
 }
@@ -66,8 +66,8 @@ mod tests {
 
     #[test]
     fn times_are_utc_dates() {
-        assert_eq!(time(0), "1970-01-01 00:00");
-        assert_eq!(time(1_795_437_296_000), "2026-11-23 12:34");
+        assert_eq!(time(0), "1970-01-01 00:00 UTC");
+        assert_eq!(time(1_795_437_296_000), "2026-11-23 12:34 UTC");
     }
 
     #[test]
