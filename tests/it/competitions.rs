@@ -672,6 +672,18 @@ async fn play_a_competition(server: &TestServer) {
         page.contains("95% interval") && page.contains("equal means share a rank"),
         "{page}"
     );
+    // Every limit, as the matches are played under it: the competition's 2000 ms per
+    // move, the server's for the rest, all in CPU time.
+    for said in [
+        "CPU time per move (move_timeout_ms)",
+        "2000 ms",
+        "(time_bank_ms)",
+        "10000 ms",
+        "(memory_limit_mb)",
+        "wall-clock backstop",
+    ] {
+        assert!(page.contains(said), "{said}: {page}");
+    }
     assert_eq!(
         page.matches("<table class=\"data board\">").count(),
         2,

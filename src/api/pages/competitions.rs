@@ -65,8 +65,10 @@ pub(super) async fn competition_page(
         None
     };
     let limits = v.limits;
-    let ms = |x: Option<u64>, unit: &str| {
-        x.map_or("the server's".to_string(), |x| format!("{x} {unit}"))
+    // The limits matches are played under: the competition's, else the server's.
+    let effective = limits.apply(crate::runner::Limits::default());
+    let effective_ms = |d: Option<std::time::Duration>| {
+        d.map_or("no limit".to_string(), |d| format!("{} ms", d.as_millis()))
     };
     let settings = if c.kind == "default" {
         Vec::new()
@@ -109,9 +111,31 @@ pub(super) async fn competition_page(
                     _ => "the latest version".to_string(),
                 },
             ),
-            ("time per move".into(), ms(limits.move_timeout_ms, "ms")),
-            ("time to start".into(), ms(limits.startup_timeout_ms, "ms")),
-            ("memory".into(), ms(limits.memory_limit_mb, "MiB")),
+            (
+                "CPU time per move (move_timeout_ms)".into(),
+                effective_ms(effective.move_timeout),
+            ),
+            (
+                "CPU time to start (startup_timeout_ms)".into(),
+                effective_ms(effective.startup_timeout),
+            ),
+            (
+                "time bank: CPU time the moves may use beyond their limit, all together (time_bank_ms)".into(),
+                format!("{} ms", effective.time_bank.as_millis()),
+            ),
+            (
+                "wall-clock backstop".into(),
+                format!(
+                    "an answer is given up on after {} x (its limit + the CPU time it used): the limits count CPU time, the same on a busy server",
+                    crate::runner::WALL_BACKSTOP_FACTOR
+                ),
+            ),
+            (
+                "memory, all the bot's processes (memory_limit_mb)".into(),
+                effective
+                    .memory_limit_mb
+                    .map_or("no limit".into(), |m| format!("{m} MiB")),
+            ),
         ]
     };
     let practice = v
