@@ -1171,6 +1171,57 @@ mod tests {
         }
     }
 
+    /// A version that failed its validation match (`invalid`) gives its quota back, as
+    /// one that failed to build does.
+    #[tokio::test]
+    async fn an_invalid_version_does_not_count_against_the_quota() {
+        use crate::storage::bots::build_status;
+        for (db, _guard) in backends().await {
+            let now = now_ms();
+            let c = create(&db, spec(now), None).await.unwrap();
+            let (e, v) = entered_bot(&db, &c).await;
+            let used = |q: Quota| q.used;
+            let before = used(
+                version_quota(&db, &c, e.entrant_id, now_ms())
+                    .await
+                    .unwrap(),
+            );
+            db.add_bot_version(v.bot_id, &crate::storage::test_support::with_build())
+                .await
+                .unwrap();
+            let claimed = db.claim_build("w", 60_000).await.unwrap().unwrap();
+            let counted = used(
+                version_quota(&db, &c, e.entrant_id, now_ms())
+                    .await
+                    .unwrap(),
+            );
+            assert_eq!(counted, before + 1);
+            assert!(
+                db.finish_build(
+                    claimed.bot_version_id,
+                    "w",
+                    build_status::INVALID,
+                    None,
+                    "crashed"
+                )
+                .await
+                .unwrap()
+            );
+            let after = used(
+                version_quota(&db, &c, e.entrant_id, now_ms())
+                    .await
+                    .unwrap(),
+            );
+            assert_eq!(after, before, "the invalid version still counts");
+            let row = db
+                .get_bot_version(claimed.bot_version_id)
+                .await
+                .unwrap()
+                .unwrap();
+            assert_eq!(row.build_status, build_status::INVALID);
+        }
+    }
+
     /// A close moved earlier never freezes the public board in the past: moved to now,
     /// the board shows what it showed (no freeze before the close); a board frozen
     /// already stays frozen from the same instant.

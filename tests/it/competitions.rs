@@ -678,7 +678,7 @@ async fn play_a_competition(server: &TestServer) {
         "CPU time per move (move_timeout_ms)",
         "2000 ms",
         "(time_bank_ms)",
-        "10000 ms",
+        "30000 ms",
         "(memory_limit_mb)",
         "wall-clock backstop",
     ] {
