@@ -100,6 +100,45 @@ pub struct Session {
     watch_at: Instant,
     /// When the runtime last had a turn.
     turned_at: Instant,
+    /// The operator's runtime folders as the bot's stderr shows them, and the neutral
+    /// name each is shown as instead (`/runtimes/NAME`): a traceback through a
+    /// runtime's library names no folder of the server's.
+    redact: Vec<(String, String)>,
+}
+
+/// The operator's runtimes of `sandbox` as (their folder, `/runtimes/NAME`), longest
+/// folder first (a folder inside another is replaced first).
+fn runtime_redactions(sandbox: &super::Sandbox) -> Vec<(String, String)> {
+    let super::Sandbox::Full(full) = sandbox else {
+        return Vec::new();
+    };
+    let mut out: Vec<(String, String)> = full
+        .runtimes
+        .iter()
+        .map(|r| {
+            (
+                r.prefix.to_string_lossy().into_owned(),
+                format!("/runtimes/{}", super::runtimes::name_of(r)),
+            )
+        })
+        .filter(|(from, _)| from.len() > 1)
+        .collect();
+    out.sort_by_key(|(from, _)| std::cmp::Reverse(from.len()));
+    out
+}
+
+/// `line` with each runtime folder of `redact` replaced by its neutral name.
+fn redacted(redact: &[(String, String)], line: String) -> String {
+    if redact.iter().all(|(from, _)| !line.contains(from.as_str())) {
+        return line;
+    }
+    let mut line = line;
+    for (from, to) in redact {
+        if line.contains(from.as_str()) {
+            line = line.replace(from.as_str(), to);
+        }
+    }
+    line
 }
 
 /// How a wait for an answer ended.
@@ -155,6 +194,7 @@ impl Session {
             step_limit: Box::pin(tokio::time::sleep_until(started.into())),
             watch_at: started + WATCHDOG_PERIOD,
             turned_at: started,
+            redact: runtime_redactions(launch.sandbox),
             process,
         })
     }
@@ -169,7 +209,14 @@ impl Session {
     /// each answer only after the stderr written before it, so a line written before
     /// an answer is never handed on after it.
     pub fn take_stderr_lines(&mut self) -> Vec<String> {
-        self.stderr.take_lines()
+        let lines = self.stderr.take_lines();
+        if self.redact.is_empty() {
+            return lines;
+        }
+        lines
+            .into_iter()
+            .map(|l| redacted(&self.redact, l))
+            .collect()
     }
 
     /// Sends `message` within the startup limit (the start message).
@@ -508,6 +555,11 @@ impl Session {
             None => self.process.wait().await.ok(),
         };
         let (stderr_tail, late_stderr) = self.stderr.finish(EXIT_GRACE).await;
+        let stderr_tail = redacted(&self.redact, stderr_tail);
+        let late_stderr = late_stderr
+            .into_iter()
+            .map(|l| redacted(&self.redact, l))
+            .collect();
         Ended {
             exit,
             stderr_tail,

@@ -498,6 +498,31 @@ async fn a_numpy_robot_runs_from_a_venv_under_tmp_by_absolute_path_and_by_the_ru
         text.contains("numpy") && text.contains("hint: a module is missing"),
         "{log}"
     );
+    // A traceback through a runtime's library names the runtime, not the server's
+    // folder: numpy's own files show under /runtimes/sci.
+    let (failing, failing_token) = crate::support::upload(
+        &server,
+        json!({"name": "numpy-traceback", "command": "python3 t.py", "runtime": "sci",
+               "files": {"t.py": "import sys, numpy\nsys.stdin.readline()\nnumpy.loadtxt('missing.txt')\n"}}),
+    )
+    .await;
+    let version = crate::support::wait_built(&server, failing).await;
+    assert_eq!(version["build_status"], "invalid", "{version}");
+    let (_, log) = server
+        .get(
+            &format!("/api/bots/{failing}/versions/1/build-log"),
+            Some(&failing_token),
+        )
+        .await;
+    let text = log["build_log"].as_str().unwrap_or_default();
+    assert!(
+        text.contains("/runtimes/sci/") && text.contains("numpy"),
+        "{text}"
+    );
+    assert!(
+        !text.contains(venv.to_str().unwrap()),
+        "the server's folder shows: {text}"
+    );
     // A runtime the server does not offer: refused with those it offers.
     let (s, v) = server
         .post(
