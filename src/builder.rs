@@ -27,10 +27,12 @@ use crate::storage::builds::{MAX_BUILD_ATTEMPTS, build_retries_exhausted};
 const POLL: Duration = Duration::from_secs(2);
 
 /// The validation match's steps: enough for a bot to start and make its first moves
-/// (running out of them is no fault).
-const VALIDATION_STEPS: u32 = 60;
+/// (running out of them is no fault), few enough that the builder, which plays one at a
+/// time, is not held long by a slow bot.
+const VALIDATION_STEPS: u32 = 20;
 
-/// The validation match's maze: generated (public, the same for every version).
+/// The validation match's maze outside competitions: generated (public, the same for
+/// every version).
 const VALIDATION_MAZE: (u32, u64) = (12, 20_260_101);
 
 /// What a pool's builder needs.
@@ -264,12 +266,8 @@ impl Builder {
         if !self.validate {
             return (build_status::READY, log);
         }
-        let maze = match crate::engine::generator::generate(VALIDATION_MAZE.0, VALIDATION_MAZE.1) {
-            Ok(m) => m,
-            Err(e) => {
-                tracing::error!(cause = %e, "cannot make the validation maze");
-                return (build_status::READY, log);
-            }
+        let Some((maze, limits, place)) = self.validation_setting(version).await else {
+            return (build_status::READY, log);
         };
         let bot = BotSpec {
             command: version.command.clone(),
@@ -280,17 +278,44 @@ impl Builder {
         };
         let limits = Limits {
             max_steps: VALIDATION_STEPS,
-            ..Limits::default()
+            ..limits
         };
-        let record = crate::runner::run_match(&bot, &maze, 0, limits, &self.sandbox, |_| {}).await;
+        // On a thread of its own, as the workers play matches: its waits on the bot's
+        // pipes must not hold up the server's runtime.
+        let sandbox = self.sandbox.clone();
+        let played = tokio::task::spawn_blocking(move || {
+            let rt = tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()?;
+            Ok::<_, std::io::Error>(rt.block_on(crate::runner::run_match(
+                &bot,
+                &maze,
+                0,
+                limits,
+                &sandbox,
+                |_| {},
+            )))
+        })
+        .await;
+        let record = match played {
+            Ok(Ok(r)) => r,
+            Ok(Err(e)) => {
+                tracing::error!(cause = %e, "cannot play a validation match");
+                return (build_status::READY, log);
+            }
+            Err(e) => {
+                tracing::error!(cause = %e, "a validation match failed");
+                return (build_status::READY, log);
+            }
+        };
         if !log.is_empty() && !log.ends_with('\n') {
             log.push('\n');
         }
         match record.status {
             MatchStatus::Finished | MatchStatus::StepLimit => {
                 log.push_str(&format!(
-                    "[validation match: played {} steps on a public {}x{} maze without a fault]",
-                    record.total_steps, VALIDATION_MAZE.0, VALIDATION_MAZE.0
+                    "[validation match: played {} steps on {place} without a fault]",
+                    record.total_steps
                 ));
                 (build_status::READY, log)
             }
@@ -299,7 +324,9 @@ impl Builder {
                     .error
                     .as_ref()
                     .map_or_else(|| status.to_string(), |e| e.reason.clone());
-                log.push_str(&format!("[validation match: {status}: {reason}]\n"));
+                log.push_str(&format!(
+                    "[validation match on {place}: {status}: {reason}]\n"
+                ));
                 let tail = record.stderr_tail.trim_end();
                 if !tail.is_empty() {
                     log.push_str(&format!("--- the end of its stderr ---\n{tail}\n"));
@@ -311,6 +338,59 @@ impl Builder {
                 (build_status::INVALID, log)
             }
         }
+    }
+}
+
+impl Builder {
+    /// Where and how `version` plays its validation match: for a bot entered in a
+    /// competition, the competition's first practice maze (public, of its size) under
+    /// its limits; otherwise a generated public maze under the server's limits. Also
+    /// the maze's description for the log. `None` if no maze can be had (the generator
+    /// failed: a bug, logged, and the version is not held up by it).
+    async fn validation_setting(
+        &self,
+        version: &BotVersionRow,
+    ) -> Option<(crate::engine::Maze, Limits, String)> {
+        let generated = || {
+            let (dim, seed) = VALIDATION_MAZE;
+            crate::engine::generator::generate(dim, seed).map(|m| {
+                (
+                    m,
+                    Limits::default(),
+                    format!("a public generated {dim}x{dim} maze"),
+                )
+            })
+        };
+        let competitions = self
+            .storage
+            .competitions_of_bot(version.bot_id)
+            .await
+            .unwrap_or_default();
+        for c in competitions.iter().filter(|c| c.kind != "default") {
+            let limits = c.limit_set().apply(Limits::default());
+            let mazes = self
+                .storage
+                .competition_mazes(c.competition_id)
+                .await
+                .unwrap_or_default();
+            if let Some(m) = mazes.iter().find(|m| m.maze_set == "practice")
+                && let Ok(Some(row)) = self.storage.get_maze(m.maze_id).await
+                && !row.hidden
+                && let Ok(maze) = crate::engine::mazefile::parse(row.layout.as_bytes())
+            {
+                return Some((
+                    maze,
+                    limits,
+                    format!("the practice maze {} of competition {}", row.name, c.name),
+                ));
+            }
+            if let Ok((maze, _, place)) = generated() {
+                return Some((maze, limits, place));
+            }
+        }
+        generated()
+            .map_err(|e| tracing::error!(cause = %e, "cannot make the validation maze"))
+            .ok()
     }
 }
 

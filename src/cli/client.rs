@@ -927,8 +927,8 @@ pub fn practice(args: PracticeArgs) -> anyhow::Result<()> {
             .collect();
         if !scores.is_empty() {
             println!(
-                "mean score {:.3} over {} ({} finished)",
-                scores.iter().sum::<f64>() / scores.len() as f64,
+                "mean score {} over {} ({} finished)",
+                crate::ranking::Mean::of_scores(scores.iter().copied()),
                 super::count(scores.len() as i64, "maze", "mazes"),
                 results.iter().filter(|m| m["status"] == "finished").count()
             );

@@ -194,7 +194,7 @@ pub(super) fn markdown(
             let score = {
                 let vals: Vec<f64> = runs.iter().filter_map(|r| r.score).collect();
                 if vals.len() == runs.len() {
-                    format!("{:.3}", vals.iter().sum::<f64>() / vals.len() as f64)
+                    crate::ranking::Mean::of_scores(vals.iter().copied()).to_string()
                 } else {
                     format!(
                         "{} ({}/{} DNF)",

@@ -478,7 +478,11 @@ impl Session {
             (Some(before), Some(now)) => Some(now.saturating_sub(before)),
             _ => None,
         };
-        self.cpu_mark = cpu_now;
+        // A counter that could not be read leaves the mark where it was: the next step
+        // is measured from the last reading, never from zero.
+        if cpu_now.is_some() {
+            self.cpu_mark = cpu_now;
+        }
         // An answer that came after its CPU time ran out is late, however it was
         // noticed: the same rule whenever the counter is read.
         if let (Some(used), Some(allowed), true) = (cpu_us, allowed_us, self.cpu_counted) {

@@ -760,7 +760,8 @@ async fn a_python_2_robot_submitted_with_python3_is_invalid_at_upload_with_its_s
     assert_eq!(s, 200, "{log}");
     let text = log["build_log"].as_str().unwrap();
     assert!(
-        text.contains("[validation match: crashed") && text.contains("SyntaxError"),
+        text.contains("[validation match on a public generated 12x12 maze: crashed")
+            && text.contains("SyntaxError"),
         "{text}"
     );
     let (s, v) = server

@@ -554,6 +554,22 @@ async fn play_a_competition(server: &TestServer) {
         |v| v["versions"][0]["status"] == "ranked",
     )
     .await;
+    // Its validation match was played on the competition's practice maze (public),
+    // under the competition's limits.
+    let (s, log) = server
+        .get(
+            &format!("/api/bots/{ada_bot}/versions/2/build-log"),
+            Some(&ada),
+        )
+        .await;
+    assert_eq!(s, 200, "{log}");
+    assert!(
+        log["build_log"]
+            .as_str()
+            .unwrap_or_default()
+            .contains("on the practice maze warm-up of competition class-2027 without a fault"),
+        "{log}"
+    );
     let version_of_ada = |board: &Value| {
         board["standings"]
             .as_array()
