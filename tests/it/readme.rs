@@ -478,6 +478,9 @@ fn what_the_readme_examples_write_is_ignored_by_git() {
         "mazearena-data/bots/x",
         "maze-cup/mazes/public-1.txt",
         "maze-cup-export/competition.toml",
+        "maze-16.txt",
+        "maze-16.svg",
+        "tournament.db",
         "bots/c/minimal_bot",
         "bots/cpp/minimal_bot",
         "bots/cpp/mazebot.o",
@@ -629,4 +632,94 @@ fn the_readme_python_27_runtime_recipe_runs_as_written() {
     let block = block.replace("/tmp/py27", venv.to_str().unwrap());
     let out = sh(dir.path(), &block, &[]);
     assert!(out.contains("Task complete! Score:"), "{out}");
+}
+
+/// The README's local examples that have no test of their own run as written, top to
+/// bottom in one folder laid out as the checkout (with ../shared beside it): the
+/// adapter's robot.py, the tournament without a server, the maze tools.
+#[test]
+fn the_readme_local_examples_run_top_to_bottom() {
+    let dir = tempfile::tempdir().unwrap();
+    let work = dir.path().join("work");
+    std::fs::create_dir_all(&work).unwrap();
+    for link in ["bots", "mazes", "tests"] {
+        std::os::unix::fs::symlink(root().join(link), work.join(link)).unwrap();
+    }
+    std::os::unix::fs::symlink(root().join("../shared"), dir.path().join("shared")).unwrap();
+    let mut ran = 0;
+    for section in [
+        "Testing a bot locally",
+        "Tournaments without a server",
+        "Maze tools",
+    ] {
+        for block in blocks(section) {
+            if has_a_test_of_its_own(&block) {
+                continue;
+            }
+            let out = sh(&work, &block, &[]);
+            ran += 1;
+            if block.contains("udacity_adapter.py") {
+                assert!(out.contains("Task complete! Score:"), "{out}");
+            }
+            if block.contains("mazearena tournament") {
+                assert!(out.contains("rank") && out.contains("minimal"), "{out}");
+            }
+            if block.contains("maze solve") {
+                assert!(work.join("maze-16.svg").exists(), "{out}");
+            }
+        }
+    }
+    assert_eq!(ran, 3, "the adapter, the tournament, the maze tools");
+}
+
+/// Whether a README shell block is run by a test of its own (the viewer, the numpy
+/// venv, the Python 2.7 runtime).
+fn has_a_test_of_its_own(block: &str) -> bool {
+    block.contains("--html match.html") || block.contains("pip install")
+}
+
+/// Every shell example of the README is run by a test: by the section tests above, in
+/// the README's order, or by `.ci/image.sh` (the container blocks); the Quick start's
+/// two commands are what CI itself runs (the build and `cargo test`). A new section
+/// with examples fails here until a test runs it.
+#[test]
+fn every_readme_shell_example_is_run_by_a_test() {
+    let text = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let tested = [
+        "Quick start",
+        "Testing a bot locally",
+        "Running the server",
+        "Running a competition",
+        "Take part from the command line",
+        "Closing a competition",
+        "Scaling out: PostgreSQL, API servers and workers",
+        "Tournaments without a server",
+        "Maze tools",
+    ];
+    let mut section = String::new();
+    let mut seen = Vec::new();
+    for line in text.lines() {
+        if let Some(h) = line.strip_prefix("## ") {
+            section = h.to_string();
+        } else if line == "```sh" {
+            assert!(
+                tested.contains(&section.as_str()),
+                "the README's section {section:?} has a shell example no test runs"
+            );
+            seen.push(section.clone());
+        }
+    }
+    for s in tested {
+        assert!(
+            seen.iter().any(|x| x == s),
+            "no shell example left in {s:?}"
+        );
+    }
+    // In reading order, a competition is made and entered, taken part in, then closed.
+    let at = |h: &str| text.find(&format!("## {h}\n")).unwrap();
+    assert!(
+        at("Running a competition") < at("Take part from the command line")
+            && at("Take part from the command line") < at("Closing a competition"),
+        "the README closes the competition before its entrants take part"
+    );
 }
