@@ -568,19 +568,7 @@ async fn submissions(
             .await?
             .into_iter()
             .find(|r| r.entrant_id == e.entrant_id)
-            .map(|r| BoardLine {
-                rank: r.rank,
-                entrant: r.entrant_name.clone(),
-                bot_id: r.bot_id,
-                bot_name: r.bot_name.clone(),
-                version: r.version,
-                played: r.played,
-                finished: r.finished,
-                mean_score: r.mean_score,
-                score_sum30: r.score_sum30,
-                finish_rate: r.finish_rate,
-                uncertainty: r.uncertainty.clone(),
-            })
+            .map(|r| BoardLine::from_result(&r))
     } else {
         None
     };

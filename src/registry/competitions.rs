@@ -564,6 +564,23 @@ impl BoardLine {
         }
     }
 
+    /// An entrant's line of the final results.
+    pub fn from_result(r: &ResultRow) -> BoardLine {
+        BoardLine {
+            rank: r.rank,
+            entrant: r.entrant_name.clone(),
+            bot_id: r.bot_id,
+            bot_name: r.bot_name.clone(),
+            version: r.version,
+            played: r.played,
+            finished: r.finished,
+            mean_score: r.mean_score,
+            score_sum30: r.score_sum30,
+            finish_rate: r.finish_rate,
+            uncertainty: r.uncertainty.clone(),
+        }
+    }
+
     /// The exact mean score.
     pub fn mean(&self) -> Mean {
         Mean::new(self.score_sum30, self.played)

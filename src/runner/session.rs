@@ -290,7 +290,9 @@ impl Session {
         };
         self.cpu_cap = None;
         match waited {
-            Waited::Got(Ok(framing::Next::Line)) => self.answer(since, sense.step, allowed_us),
+            Waited::Got(Ok(framing::Next::Line)) => {
+                self.answer(since, sense.step, limit, allowed_us)
+            }
             Waited::Got(Ok(framing::Next::End)) => {
                 let reason = format!("{CLOSED_STDOUT} before answering step {}", sense.step);
                 self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
@@ -469,9 +471,15 @@ impl Session {
         with_time_limit(verdict, "cpu_time", allowed / 1000)
     }
 
-    /// The verdict on the line the replies hold, answered `since`, which may have used
-    /// `allowed_us` of CPU time.
-    fn answer(&mut self, since: Instant, step: u32, allowed_us: Option<u64>) -> Verdict {
+    /// The verdict on the line the replies hold, answered `since`, whose step's limit is
+    /// `limit` and which may have used `allowed_us` of CPU time (the limit and the bank).
+    fn answer(
+        &mut self,
+        since: Instant,
+        step: u32,
+        limit: Option<Duration>,
+        allowed_us: Option<u64>,
+    ) -> Verdict {
         let answer_us = since.elapsed().as_micros() as u64;
         let cpu_now = self.process.cpu_us();
         let cpu_us = match (self.cpu_mark, cpu_now) {
@@ -487,16 +495,13 @@ impl Session {
         // noticed: the same rule whenever the counter is read.
         if let (Some(used), Some(allowed), true) = (cpu_us, allowed_us, self.cpu_counted) {
             if used > allowed {
-                let limit = if step == 1 {
-                    self.limits.startup_timeout
-                } else {
-                    self.limits.move_timeout
-                };
                 return self.cpu_fault(step, used, allowed, limit);
             }
             if step > 1 {
-                let limit = self.limits.move_timeout.map_or(0, |l| l.as_micros() as u64);
-                self.bank_left_us = self.bank_left_us.saturating_sub(used.saturating_sub(limit));
+                let limit_us = limit.map_or(0, |l| l.as_micros() as u64);
+                self.bank_left_us = self
+                    .bank_left_us
+                    .saturating_sub(used.saturating_sub(limit_us));
             }
         }
         let line = self.replies.line();

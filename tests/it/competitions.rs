@@ -494,6 +494,9 @@ async fn play_a_competition(server: &TestServer) {
         .await;
     assert_eq!(s, 200, "{mine}");
     assert_eq!(mine["versions"].as_array().unwrap().len(), 2, "{mine}");
+    // Nothing of the final is told early: no final result, not the final phase.
+    assert!(mine["final_result"].is_null(), "{mine}");
+    assert_ne!(mine["phase"], "final", "{mine}");
     assert!(
         mine["versions_quota"]["message"]
             .as_str()
