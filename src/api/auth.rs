@@ -44,7 +44,17 @@ impl FromRequestParts<AppState> for Caller {
             .ok_or_else(|| {
                 ApiError::Unauthorized("the Authorization header must be `Bearer TOKEN`".into())
             })?;
-        let hash = hash_token(token);
+        Caller::from_key_hash(state, hash_token(token)).await
+    }
+}
+
+impl Caller {
+    /// The caller a key with SHA-256 `hash` makes (a Bearer token, or the key a
+    /// browser session was opened with).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn from_key_hash(state: &AppState, hash: String) -> Result<Caller, ApiError> {
         if hash == state.settings.admin_token_hash {
             Ok(Caller::Admin)
         } else if let Some(id) = state.storage.organiser_by_key(&hash).await? {
@@ -53,9 +63,7 @@ impl FromRequestParts<AppState> for Caller {
             Ok(Caller::Token(hash))
         }
     }
-}
 
-impl Caller {
     /// Whether this is the admin.
     pub fn is_admin(&self) -> bool {
         matches!(self, Caller::Admin)

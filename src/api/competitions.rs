@@ -35,6 +35,114 @@ pub(super) fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(choose))
         .routes(routes!(results))
         .routes(routes!(results_csv))
+        .routes(routes!(create_rejudge, list_rejudges))
+        .routes(routes!(export))
+}
+
+/// Who asks, as a rejudge records it.
+pub(crate) fn requested_by(caller: &Caller) -> String {
+    match caller {
+        Caller::Organiser(id) => format!("organiser:{id}"),
+        _ => "admin".into(),
+    }
+}
+
+/// A rejudge of competition `name` for `caller` (its organiser or the admin): the API's,
+/// the CLI's and the organiser page's one way.
+///
+/// # Errors
+/// Not its organiser; a bad request.
+pub(crate) async fn rejudge(
+    state: &AppState,
+    caller: &Caller,
+    name: &str,
+    request: &ops::RejudgeRequest,
+) -> ApiResult<crate::storage::rejudges::RejudgeRow> {
+    let c = find(state, name).await?;
+    caller.require_organiser_of(&c)?;
+    let row = ops::rejudge(&state.storage, &c, request, &requested_by(caller)).await?;
+    state.wake.notify_waiters();
+    Ok(row)
+}
+
+/// Play again a version's or a maze's ranking matches (a rejudge: after an
+/// infrastructure failure or a referee fix; the competition's organiser or the admin).
+/// Each match goes back to the queue under its own id, seed and repeat; its earlier
+/// record is kept, marked superseded (`GET /api/matches/{id}` lists it); the boards and
+/// results are counted again as the matches are played.
+#[utoipa::path(post, path = "/api/competitions/{name}/rejudges", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")),
+    request_body = ops::RejudgeRequest, security(("bearer" = [])),
+    responses((status = 201, body = crate::storage::rejudges::RejudgeRow), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody), (status = 422, body = ErrorBody)))]
+async fn create_rejudge(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+    AppJson(body): AppJson<ops::RejudgeRequest>,
+) -> ApiResult<(StatusCode, axum::Json<crate::storage::rejudges::RejudgeRow>)> {
+    let row = rejudge(&state, &caller, &name, &body).await?;
+    Ok((StatusCode::CREATED, axum::Json(row)))
+}
+
+/// The rejudges of a competition, newest first (its organiser or the admin).
+#[utoipa::path(get, path = "/api/competitions/{name}/rejudges", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")), security(("bearer" = [])),
+    responses((status = 200, body = [crate::storage::rejudges::RejudgeRow]), (status = 401, body = ErrorBody),
+        (status = 403, body = ErrorBody), (status = 404, body = ErrorBody)))]
+async fn list_rejudges(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<axum::Json<Vec<crate::storage::rejudges::RejudgeRow>>> {
+    let c = find(&state, &name).await?;
+    caller.require_organiser_of(&c)?;
+    Ok(axum::Json(state.storage.rejudges(c.competition_id).await?))
+}
+
+/// Competition `name` exported for `caller` (its organiser or the admin) as a
+/// `.tar.gz` of its folder: the API's and the organiser page's one way.
+///
+/// # Errors
+/// Not its organiser; the default competition.
+pub(crate) async fn export_archive(
+    state: &AppState,
+    caller: &Caller,
+    name: &str,
+) -> ApiResult<axum::response::Response> {
+    let c = find(state, name).await?;
+    caller.require_organiser_of(&c)?;
+    let files = ops::export_files(&state.storage, &c).await?;
+    let bytes = ops::tar_gz(&c.name, &files)
+        .map_err(|e| ApiError::Internal(format!("cannot pack the export: {e}")))?;
+    Ok((
+        [
+            (header::CONTENT_TYPE, "application/gzip".to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{}.tar.gz\"", c.name),
+            ),
+            (header::CACHE_CONTROL, "no-store".to_string()),
+        ],
+        bytes,
+    )
+        .into_response())
+}
+
+/// The competition as a `.tar.gz` of its folder (`competition.toml` and every maze,
+/// private ones included): what `mazearena competition create` or the organiser's page
+/// takes back (its organiser or the admin).
+#[utoipa::path(get, path = "/api/competitions/{name}/export", tag = "competitions",
+    params(("name" = String, Path, description = "competition name")), security(("bearer" = [])),
+    responses((status = 200, content_type = "application/gzip", body = Vec<u8>), (status = 401, body = ErrorBody),
+        (status = 403, body = ErrorBody), (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+async fn export(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppPath(name): AppPath<String>,
+) -> ApiResult<axum::response::Response> {
+    export_archive(&state, &caller, &name).await
 }
 
 /// A new organiser.
@@ -67,6 +175,19 @@ async fn create_organiser(
     caller: Caller,
     AppJson(body): AppJson<OrganiserRequest>,
 ) -> ApiResult<(StatusCode, axum::Json<OrganiserCreated>)> {
+    let created = register_organiser(&state, &caller, body).await?;
+    Ok((StatusCode::CREATED, axum::Json(created)))
+}
+
+/// Registers an organiser (the admin only): the API's and the admin page's one way.
+///
+/// # Errors
+/// Not the admin; a bad or taken name.
+pub(crate) async fn register_organiser(
+    state: &AppState,
+    caller: &Caller,
+    body: OrganiserRequest,
+) -> ApiResult<OrganiserCreated> {
     caller.require_admin()?;
     let name = body.name.trim();
     if name.is_empty() || name.chars().count() > 64 {
@@ -79,14 +200,11 @@ async fn create_organiser(
         .storage
         .create_organiser(name, &hash_token(&key))
         .await?;
-    Ok((
-        StatusCode::CREATED,
-        axum::Json(OrganiserCreated {
-            organiser_id,
-            name: name.to_string(),
-            key,
-        }),
-    ))
+    Ok(OrganiserCreated {
+        organiser_id,
+        name: name.to_string(),
+        key,
+    })
 }
 
 /// A competition's maze as anyone sees it: a practice maze by id (its layout is public);
@@ -213,7 +331,7 @@ pub(super) async fn view(
     })
 }
 
-async fn find(state: &AppState, name: &str) -> ApiResult<CompetitionRow> {
+pub(crate) async fn find(state: &AppState, name: &str) -> ApiResult<CompetitionRow> {
     state
         .storage
         .get_competition(name)
@@ -248,16 +366,29 @@ async fn create_competition(
     caller: Caller,
     AppJson(spec): AppJson<Spec<MazeText>>,
 ) -> ApiResult<(StatusCode, axum::Json<CompetitionView>)> {
-    caller.require_organiser()?;
-    let owner = match caller {
-        Caller::Organiser(id) => Some(id),
-        _ => None,
-    };
-    let c = ops::create(&state.storage, spec, owner).await?;
+    let c = create(&state, &caller, spec).await?;
     Ok((
         StatusCode::CREATED,
         axum::Json(view(&state, &c, &caller).await?),
     ))
+}
+
+/// Creates a competition for `caller` (an organiser or the admin): the API's and the
+/// organiser page's one way.
+///
+/// # Errors
+/// Not an organiser; a bad competition or maze; a taken name.
+pub(crate) async fn create(
+    state: &AppState,
+    caller: &Caller,
+    spec: Spec<MazeText>,
+) -> ApiResult<CompetitionRow> {
+    caller.require_organiser()?;
+    let owner = match caller {
+        Caller::Organiser(id) => Some(*id),
+        _ => None,
+    };
+    Ok(ops::create(&state.storage, spec, owner).await?)
 }
 
 /// A competition: timeline, phase, rules, mazes (ranking mazes by name only).
@@ -288,7 +419,22 @@ async fn edit_competition(
     AppPath(name): AppPath<String>,
     AppJson(patch): AppJson<Patch>,
 ) -> ApiResult<axum::Json<CompetitionView>> {
-    let c = find(&state, &name).await?;
+    let c = edit(&state, &caller, &name, patch).await?;
+    Ok(axum::Json(view(&state, &c, &caller).await?))
+}
+
+/// Edits competition `name` for `caller` (its organiser or the admin): the API's and
+/// the organiser page's one way.
+///
+/// # Errors
+/// Not its organiser; a change too late or out of range.
+pub(crate) async fn edit(
+    state: &AppState,
+    caller: &Caller,
+    name: &str,
+    patch: Patch,
+) -> ApiResult<CompetitionRow> {
+    let c = find(state, name).await?;
     caller.require_organiser_of(&c)?;
     if patch.organiser.is_some() {
         caller.require_admin()?;
@@ -296,11 +442,11 @@ async fn edit_competition(
     let c = ops::edit(&state.storage, c, patch, now_ms()).await?;
     // A close moved to now is acted on at once by the competitions' clock.
     state.wake.notify_waiters();
-    Ok(axum::Json(view(&state, &c, &caller).await?))
+    Ok(c)
 }
 
 /// The entrant whose key the caller gave.
-async fn entrant(state: &AppState, caller: &Caller) -> ApiResult<EntrantRow> {
+pub(crate) async fn entrant(state: &AppState, caller: &Caller) -> ApiResult<EntrantRow> {
     let none = || {
         ApiError::Unauthorized(
             "this needs an entrant's key (Authorization: Bearer KEY; POST /api/entrants gives one)"
@@ -347,8 +493,23 @@ async fn enter(
     AppPath(name): AppPath<String>,
     AppJson(body): AppJson<EntryRequest>,
 ) -> ApiResult<(StatusCode, axum::Json<EntryView>)> {
-    let c = find(&state, &name).await?;
-    let e = entrant(&state, &caller).await?;
+    let entry = enter_bot(&state, &caller, &name, body.bot_id).await?;
+    Ok((StatusCode::CREATED, axum::Json(entry)))
+}
+
+/// Enters bot `bot_id` of the caller's entrant in competition `name`: the API's and the
+/// submission page's one way.
+///
+/// # Errors
+/// No such competition or bot; not an entrant's key, or not its bot; closed.
+pub(crate) async fn enter_bot(
+    state: &AppState,
+    caller: &Caller,
+    name: &str,
+    bot_id: i64,
+) -> ApiResult<EntryView> {
+    let c = find(state, name).await?;
+    let e = entrant(state, caller).await?;
     if c.kind != "competition" {
         return Err(ApiError::Conflict(
             "the default competition needs no entry: every bot's latest version counts".into(),
@@ -363,9 +524,9 @@ async fn enter(
     }
     let bot = state
         .storage
-        .get_bot(body.bot_id)
+        .get_bot(bot_id)
         .await?
-        .ok_or_else(|| ApiError::NotFound(format!("no bot {}", body.bot_id)))?;
+        .ok_or_else(|| ApiError::NotFound(format!("no bot {bot_id}")))?;
     if state.storage.entrant_of_bot(bot.bot_id).await? != Some(e.entrant_id) {
         return Err(ApiError::Forbidden(format!(
             "bot {} is not this entrant's (register it with the entrant's key)",
@@ -376,14 +537,11 @@ async fn enter(
         .storage
         .enter_competition(c.competition_id, bot.bot_id, e.entrant_id)
         .await?;
-    Ok((
-        StatusCode::CREATED,
-        axum::Json(EntryView {
-            competition: c.name,
-            bot_id: bot.bot_id,
-            entrant: e.name,
-        }),
-    ))
+    Ok(EntryView {
+        competition: c.name,
+        bot_id: bot.bot_id,
+        entrant: e.name,
+    })
 }
 
 /// Which board.
@@ -511,8 +669,21 @@ async fn submissions(
     caller: Caller,
     AppPath(name): AppPath<String>,
 ) -> ApiResult<axum::Json<SubmissionsView>> {
-    let c = find(&state, &name).await?;
-    let e = entrant(&state, &caller).await?;
+    Ok(axum::Json(my_submissions(&state, &caller, &name).await?))
+}
+
+/// The caller's entrant's submissions and quotas in competition `name`: the API's and
+/// the "me" page's one way.
+///
+/// # Errors
+/// No such competition; not an entrant's key.
+pub(crate) async fn my_submissions(
+    state: &AppState,
+    caller: &Caller,
+    name: &str,
+) -> ApiResult<SubmissionsView> {
+    let c = find(state, name).await?;
+    let e = entrant(state, caller).await?;
     let now = now_ms();
     let entry = state
         .storage
@@ -572,7 +743,7 @@ async fn submissions(
     } else {
         None
     };
-    Ok(axum::Json(SubmissionsView {
+    Ok(SubmissionsView {
         competition: c.name.clone(),
         entrant: e.name.clone(),
         bot_id: entry.map(|x| x.bot_id),
@@ -581,7 +752,7 @@ async fn submissions(
         versions,
         versions_quota: ops::version_quota(&state.storage, &c, e.entrant_id, now).await?,
         practice_quota: ops::practice_quota(&state.storage, &c, e.entrant_id, now).await?,
-    }))
+    })
 }
 
 /// The versions an entrant chooses for the final.

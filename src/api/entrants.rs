@@ -157,7 +157,7 @@ pub struct RegistrationMode {
     pub invite_code: Option<String>,
 }
 
-fn registration_name(r: &Registration) -> &'static str {
+pub(crate) fn registration_name(r: &Registration) -> &'static str {
     match r {
         Registration::Open => "open",
         Registration::Closed => "closed",
@@ -181,7 +181,22 @@ async fn create_entrant(
     client: Option<axum::Extension<axum::extract::ConnectInfo<std::net::SocketAddr>>>,
     AppJson(body): AppJson<EntrantRequest>,
 ) -> ApiResult<(StatusCode, axum::Json<EntrantCreated>)> {
-    super::check_registration_rate(&state, &caller, client.map(|c| c.0.0))?;
+    let created = register(&state, &caller, client.map(|c| c.0.0), body).await?;
+    Ok((StatusCode::CREATED, axum::Json(created)))
+}
+
+/// Registers an entrant for `caller` from address `client` (the API's and the
+/// registration page's one way).
+///
+/// # Errors
+/// The registration limit, a bad name or member, the registration mode, a taken name.
+pub(crate) async fn register(
+    state: &AppState,
+    caller: &Caller,
+    client: Option<std::net::SocketAddr>,
+    body: EntrantRequest,
+) -> ApiResult<EntrantCreated> {
+    super::check_registration_rate(state, caller, client)?;
     crate::registry::bots::check_name(&body.name)
         .map_err(|e| ApiError::Unprocessable(e.to_string().replace("bot name", "entrant name")))?;
     if body.members.len() > MAX_MEMBERS
@@ -219,14 +234,11 @@ async fn create_entrant(
         .storage
         .create_entrant(&body.name, &members, &hash_token(&key))
         .await?;
-    Ok((
-        StatusCode::CREATED,
-        axum::Json(EntrantCreated {
-            entrant_id: row.entrant_id,
-            name: row.name,
-            key,
-        }),
-    ))
+    Ok(EntrantCreated {
+        entrant_id: row.entrant_id,
+        name: row.name,
+        key,
+    })
 }
 
 /// An entrant: name, members and bots.
@@ -329,6 +341,18 @@ async fn set_registration(
     caller: Caller,
     AppJson(body): AppJson<RegistrationMode>,
 ) -> ApiResult<axum::Json<RegistrationMode>> {
+    Ok(axum::Json(set_mode(&state, &caller, body).await?))
+}
+
+/// Sets the registration mode (the admin only): the API's and the admin page's one way.
+///
+/// # Errors
+/// Not the admin; a bad mode or invite code.
+pub(crate) async fn set_mode(
+    state: &AppState,
+    caller: &Caller,
+    body: RegistrationMode,
+) -> ApiResult<RegistrationMode> {
     caller.require_admin()?;
     let r = match (body.mode.as_str(), body.invite_code.as_deref()) {
         ("open", None) => Registration::Open,
@@ -345,8 +369,8 @@ async fn set_registration(
         }
     };
     state.storage.set_registration(&r).await?;
-    Ok(axum::Json(RegistrationMode {
+    Ok(RegistrationMode {
         mode: registration_name(&r).into(),
         invite_code: None,
-    }))
+    })
 }

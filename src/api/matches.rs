@@ -116,6 +116,10 @@ pub struct MatchView {
     /// Wall time, bot CPU time, answer times.
     #[schema(value_type = Object)]
     pub timings: Value,
+    /// Earlier outcomes of this match that rejudges superseded (they no longer count),
+    /// oldest first; only in `GET /api/matches/{id}`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub superseded: Vec<crate::storage::rejudges::SupersededRow>,
 }
 
 /// A match's per-step trace, with the maze to replay it on.
@@ -180,12 +184,27 @@ async fn create_match(
     caller: Caller,
     AppJson(body): AppJson<MatchRequest>,
 ) -> ApiResult<(StatusCode, axum::Json<MatchQueued>)> {
+    let queued = queue_match(&state, &caller, body).await?;
+    Ok((StatusCode::ACCEPTED, axum::Json(queued)))
+}
+
+/// Queues a match of a bot's latest version for `caller` (its owner or the admin): the
+/// API's and the "practice" button's one way, with every check and quota.
+///
+/// # Errors
+/// No such bot or maze; not its owner; a paused or unplayable bot; a hidden maze; the
+/// queue, the owner's share of it, the practice quota or the stored bytes' cap.
+pub(crate) async fn queue_match(
+    state: &AppState,
+    caller: &Caller,
+    body: MatchRequest,
+) -> ApiResult<MatchQueued> {
     let bot = state
         .storage
         .get_bot(body.bot_id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("no bot {}", body.bot_id)))?;
-    caller.require_owner(&state, bot.bot_id).await?;
+    caller.require_owner(state, bot.bot_id).await?;
     if let Some(reason) = &bot.paused_reason {
         return Err(paused_error(bot.bot_id, reason));
     }
@@ -201,11 +220,11 @@ async fn create_match(
             bot.version, bot.bot_id, bot.bot_id, bot.version
         )));
     }
-    let maze = find_maze(&state, body.maze_id).await?;
+    let maze = find_maze(state, body.maze_id).await?;
     if maze.hidden && !caller.is_admin() {
-        return Err(hidden_error(maze.maze_id, &caller));
+        return Err(hidden_error(maze.maze_id, caller));
     }
-    check_capacity(&state, 1).await?;
+    check_capacity(state, 1).await?;
     let now = crate::storage::now_ms();
     let practice = match crate::registry::competitions::check_practice(
         &state.storage,
@@ -240,7 +259,7 @@ async fn create_match(
         }
         let waiting = state.storage.queued_for_owner_of(bot.bot_id).await?;
         if waiting >= state.settings.max_queued_per_owner {
-            return Err(owner_queue_full(bot.bot_id, waiting, &state));
+            return Err(owner_queue_full(bot.bot_id, waiting, state));
         }
     }
     let seed = match body.seed {
@@ -261,7 +280,7 @@ async fn create_match(
     {
         Ok(id) => id,
         Err(QueueRefusal::Queued(waiting)) => {
-            return Err(owner_queue_full(bot.bot_id, waiting, &state));
+            return Err(owner_queue_full(bot.bot_id, waiting, state));
         }
         Err(QueueRefusal::Practice(q)) => {
             let (message, quota) =
@@ -273,15 +292,12 @@ async fn create_match(
         }
     };
     state.wake.notify_waiters();
-    Ok((
-        StatusCode::ACCEPTED,
-        axum::Json(MatchQueued {
-            match_id,
-            status: "queued",
-            bot_version: bot.version,
-            seed,
-        }),
-    ))
+    Ok(MatchQueued {
+        match_id,
+        status: "queued",
+        bot_version: bot.version,
+        seed,
+    })
 }
 
 /// The refusal of a match whose bot's owner has `waiting` matches queued, its limit.
@@ -309,7 +325,17 @@ async fn get_match(
 ) -> ApiResult<axum::Json<MatchView>> {
     let row = find_match(&state, &caller, id).await?;
     let reveal = !row.maze_hidden || caller.is_admin();
-    Ok(axum::Json(match_view(row, reveal)))
+    let mut superseded = state.storage.superseded(id).await?;
+    if !reveal {
+        for s in &mut superseded {
+            s.score = None;
+            s.total_steps = None;
+        }
+    }
+    Ok(axum::Json(MatchView {
+        superseded,
+        ..match_view(row, reveal)
+    }))
 }
 
 /// A match as the caller may see it (`reveal`: not a hidden maze's, or the admin).
@@ -346,6 +372,7 @@ pub(super) fn match_view(row: MatchRow, reveal: bool) -> MatchView {
                 .map(serde_json::to_value),
         ),
         status: row.status.to_string(),
+        superseded: Vec::new(),
     }
 }
 

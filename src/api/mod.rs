@@ -17,6 +17,7 @@ pub mod lists;
 pub mod matches;
 pub mod mazes;
 pub mod pages;
+pub mod session;
 pub mod system;
 pub mod tournaments;
 
@@ -73,6 +74,10 @@ pub struct Settings {
     /// Bots registered per hour from one client address, anonymous registrations only
     /// (`None`: no limit).
     pub registrations: Option<Arc<RegistrationLimiter>>,
+    /// Login attempts per hour from one client address (`None`: no limit).
+    pub logins: Option<Arc<RegistrationLimiter>>,
+    /// Whether the server is reached over HTTPS: session cookies are then `Secure`.
+    pub secure_cookies: bool,
 }
 
 /// Registrations per client address: a keyed GCRA limiter (`governor`), in this

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 
-use crate::competition::{MazeSets, MazeText, Rule, Spec, Timestamp};
+use crate::competition::{MazeText, Rule, Spec, Timestamp};
 use crate::registry::competitions::{self as ops, Patch};
 use crate::storage::Storage;
 use crate::storage::competitions::CompetitionRow;
@@ -76,6 +76,25 @@ pub enum CompetitionCommand {
         /// writes them), printing the final run's progress as it moves.
         #[arg(long, value_name = "SECS")]
         wait: Option<u64>,
+        #[command(flatten)]
+        db: DatabaseArg,
+    },
+    /// Play again a version's or a maze's ranking matches (a rejudge, after an
+    /// infrastructure failure or a referee fix): the earlier records are kept, marked
+    /// superseded; the boards and results are counted again as the matches are played
+    /// by the server's workers.
+    Rejudge {
+        /// The competition's name.
+        name: String,
+        /// The bot version's id (`bot_version_id`) whose matches are played again.
+        #[arg(long, conflicts_with = "maze", required_unless_present = "maze")]
+        version_id: Option<i64>,
+        /// The maze's id whose matches are played again.
+        #[arg(long)]
+        maze: Option<i64>,
+        /// Why (kept with the rejudge).
+        #[arg(long)]
+        reason: String,
         #[command(flatten)]
         db: DatabaseArg,
     },
@@ -232,6 +251,27 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                 anyhow::ensure!(differ.is_empty(), "the results differ from a recount");
                 Ok(())
             }
+            CompetitionCommand::Rejudge {
+                name,
+                version_id,
+                maze,
+                reason,
+                db,
+            } => {
+                let storage = open(&db, false).await?;
+                let c = find(&storage, &name).await?;
+                let request = ops::RejudgeRequest {
+                    bot_version_id: version_id,
+                    maze_id: maze,
+                    reason,
+                };
+                let r = ops::rejudge(&storage, &c, &request, "admin").await?;
+                println!(
+                    "rejudge {}: {} matches of {} queued again (their earlier records are kept, superseded)",
+                    r.rejudge_id, r.matches, c.name
+                );
+                Ok(())
+            }
             CompetitionCommand::Organiser { name, db } => {
                 let storage = open(&db, false).await?;
                 let key = crate::registry::tokens::new_token()?;
@@ -293,107 +333,30 @@ async fn print_line(storage: &Storage, c: &CompetitionRow) -> anyhow::Result<()>
 pub fn read_file(file: &Path) -> anyhow::Result<Spec<MazeText>> {
     let text =
         std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
-    let spec: Spec<String> = toml::from_str(&text)
-        .with_context(|| format!("{} is not a competition file", file.display()))?;
     let base = file.parent().unwrap_or(Path::new("."));
-    let load = |paths: &Vec<String>| -> anyhow::Result<Vec<MazeText>> {
-        paths
-            .iter()
-            .map(|p| {
-                let path = base.join(p);
-                let bytes = super::read_capped(&path, crate::engine::mazefile::MAX_FILE_BYTES)?;
-                let layout = String::from_utf8(bytes)
-                    .with_context(|| format!("{} is not text", path.display()))?;
-                let name = path
-                    .file_stem()
-                    .map_or_else(|| p.clone(), |s| s.to_string_lossy().into_owned());
-                Ok(MazeText { name, layout })
-            })
-            .collect()
-    };
-    let mazes = MazeSets {
-        practice: load(&spec.mazes.practice)?,
-        public: load(&spec.mazes.public)?,
-        private: load(&spec.mazes.private)?,
-    };
-    Ok(spec.with_mazes(mazes))
+    crate::competition::read_competition_file(&text, |p| {
+        let path = base.join(p);
+        let bytes = super::read_capped(&path, crate::engine::mazefile::MAX_FILE_BYTES)
+            .map_err(|e| format!("{e:#}"))?;
+        String::from_utf8(bytes).map_err(|_| format!("{} is not text", path.display()))
+    })
+    .map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.0))
 }
 
 /// Writes competition `c` to folder `out`: `competition.toml` naming `mazes/SET/NAME.txt`.
 async fn export(storage: &Storage, c: &CompetitionRow, out: &Path) -> anyhow::Result<()> {
-    let (Some(opens), Some(closes)) = (c.opens_at, c.closes_at) else {
-        bail!("the default competition is the server's ranking: there is nothing to export");
-    };
+    let files = ops::export_files(storage, c).await?;
     if out.exists() && std::fs::read_dir(out)?.next().is_some() {
         bail!("{} is not empty", out.display());
     }
-    let mut sets: MazeSets<String> = MazeSets {
-        practice: Vec::new(),
-        public: Vec::new(),
-        private: Vec::new(),
-    };
-    for m in storage.competition_mazes(c.competition_id).await? {
-        let layout = storage
-            .get_maze(m.maze_id)
-            .await?
-            .with_context(|| format!("maze {} is gone", m.maze_id))?
-            .layout;
-        let folder = out.join("mazes").join(&m.maze_set);
-        std::fs::create_dir_all(&folder)
-            .with_context(|| format!("cannot create {}", folder.display()))?;
-        let stem: String = m
-            .name
-            .chars()
-            .map(|ch| {
-                if ch.is_ascii_alphanumeric() || "-_.".contains(ch) {
-                    ch
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        let stem = stem.trim_start_matches('.').to_string();
-        let mut file = format!("{stem}.txt");
-        let mut n = 2;
-        while folder.join(&file).exists() {
-            file = format!("{stem}-{n}.txt");
-            n += 1;
+    for (rel, text) in files {
+        let path = out.join(&rel);
+        if let Some(folder) = path.parent() {
+            std::fs::create_dir_all(folder)
+                .with_context(|| format!("cannot create {}", folder.display()))?;
         }
-        std::fs::write(folder.join(&file), layout)?;
-        let rel = format!("mazes/{}/{file}", m.maze_set);
-        match m.maze_set.as_str() {
-            "practice" => sets.practice.push(rel),
-            "public" => sets.public.push(rel),
-            _ => sets.private.push(rel),
-        }
+        std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let spec = Spec {
-        name: c.name.clone(),
-        title: c.title.clone(),
-        description: c.description.clone(),
-        rules: c.rules.clone(),
-        opens_at: Timestamp(opens),
-        closes_at: Timestamp(closes),
-        freeze_hours: c.freeze_ms.map(|ms| ms as f64 / 3_600_000.0),
-        repeats: c.repeats as u32,
-        final_repeats: c.final_repeats as u32,
-        versions_per_day: c.versions_per_day as u32,
-        practice_per_day: c.practice_per_day as u32,
-        selection: Rule::parse(&c.selection).unwrap_or_default(),
-        max_selected: c.max_selected as u32,
-        reveal_private_mazes: c.reveal_private_mazes,
-        limits: c.limit_set(),
-        mazes: sets,
-    };
-    let text = toml::to_string(&spec).context("cannot write the competition as TOML")?;
-    std::fs::create_dir_all(out)?;
-    std::fs::write(
-        out.join("competition.toml"),
-        format!(
-            "# Exported by mazearena {}\n{text}",
-            crate::runner::ENGINE_VERSION
-        ),
-    )?;
     Ok(())
 }
 

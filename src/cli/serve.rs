@@ -80,6 +80,14 @@ pub struct ServeArgs {
     /// token (0: no limit); more are refused with 429 and Retry-After.
     #[arg(long, env = "MAZEARENA_REGISTRATIONS_PER_HOUR", default_value_t = 20)]
     registrations_per_hour: u32,
+    /// Logins (`/login`, right or wrong) that may be tried per hour from one client
+    /// address (0: no limit); more are refused with 429 and Retry-After.
+    #[arg(long, env = "MAZEARENA_LOGINS_PER_HOUR", default_value_t = 60)]
+    logins_per_hour: u32,
+    /// The server is reached over HTTPS (directly or through a proxy): session cookies
+    /// are marked `Secure`. (A proxy's `X-Forwarded-Proto: https` also does it.)
+    #[arg(long, env = "MAZEARENA_SECURE_COOKIES")]
+    secure_cookies: bool,
     /// The most MiB of stored match records (compressed traces) one owner may have;
     /// past it, its new matches are refused until old ones are pruned (0: no cap).
     #[arg(
@@ -289,6 +297,8 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             max_stored_bytes_per_owner: (args.max_stored_mib_per_owner > 0.0)
                 .then_some((args.max_stored_mib_per_owner * 1_048_576.0) as i64),
             registrations: api::registration_limiter(args.registrations_per_hour),
+            logins: api::registration_limiter(args.logins_per_hour),
+            secure_cookies: args.secure_cookies,
         }),
         metrics: metrics.clone(),
         wake: wake.clone(),

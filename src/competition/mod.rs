@@ -8,5 +8,5 @@ pub mod spec;
 pub mod timeline;
 
 pub use selection::{Candidate, Rule, VersionScore};
-pub use spec::{Limits, MazeSets, MazeText, Spec, SpecError, Timestamp};
+pub use spec::{Limits, MazeSets, MazeText, Spec, SpecError, Timestamp, read_competition_file};
 pub use timeline::{DAY_MS, Phase, Quota, Timeline};

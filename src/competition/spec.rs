@@ -423,6 +423,41 @@ impl Limits {
     }
 }
 
+/// Reads a competition file's text (TOML naming maze files) and gives each maze its
+/// text from `lookup` (a path as the file names it -> the maze file's text, or why
+/// not). A maze is named by its file's stem.
+///
+/// # Errors
+/// The text is not a competition file; a maze cannot be found or read.
+pub fn read_competition_file(
+    text: &str,
+    mut lookup: impl FnMut(&str) -> Result<String, String>,
+) -> Result<Spec<MazeText>, SpecError> {
+    let spec: Spec<String> =
+        toml::from_str(text).map_err(|e| SpecError(format!("not a competition file: {e}")))?;
+    let mut load = |paths: &Vec<String>| -> Result<Vec<MazeText>, SpecError> {
+        paths
+            .iter()
+            .map(|p| {
+                let layout = lookup(p).map_err(SpecError)?;
+                let file = p.rsplit('/').next().unwrap_or(p);
+                let name = file
+                    .rsplit_once('.')
+                    .map_or(file, |(stem, _)| stem)
+                    .to_string();
+                let name = if name.is_empty() { p.clone() } else { name };
+                Ok(MazeText { name, layout })
+            })
+            .collect()
+    };
+    let mazes = MazeSets {
+        practice: load(&spec.mazes.practice)?,
+        public: load(&spec.mazes.public)?,
+        private: load(&spec.mazes.private)?,
+    };
+    Ok(spec.with_mazes(mazes))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,6 +22,59 @@ pub enum BotFiles {
     Map(BTreeMap<String, String>),
     /// An archive's bytes.
     Archive(Vec<u8>),
+    /// The files (a map or an archive) of a `robot.py` written for the original task, to
+    /// which the server adds its adapter ([`ORIGINAL_TASK_ADAPTER`], as
+    /// [`ADAPTER_FILE`]) so that its author uploads only their own files.
+    OriginalTask(Box<BotFiles>),
+}
+
+/// The adapter that runs an unchanged original-task `robot.py` as a protocol-v1 bot.
+pub const ORIGINAL_TASK_ADAPTER: &str = include_str!("../../bots/python/udacity_adapter.py");
+
+/// The adapter's file name in a bot's folder.
+pub const ADAPTER_FILE: &str = "udacity_adapter.py";
+
+/// The robot file an original-task upload must hold.
+pub const ROBOT_FILE: &str = "robot.py";
+
+/// Writes `files` into `dest` (checking every rule of [`crate::botfiles`]).
+fn write_upload(files: &BotFiles, dest: &Path, limits: &BundleLimits) -> Result<BundleSummary> {
+    Ok(match files {
+        BotFiles::Map(map) => botfiles::write_files(map, dest, limits)?,
+        BotFiles::Archive(bytes) => botfiles::unpack_archive(bytes, dest, limits)?,
+        BotFiles::OriginalTask(inner) => {
+            let summary = write_upload(inner, dest, limits)?;
+            if !dest.join(ROBOT_FILE).is_file() {
+                return Err(RegistryError::Invalid(format!(
+                    "an original-task robot needs a file named {ROBOT_FILE} at the top of its \
+                     files (the upload has {} files, none of them {ROBOT_FILE})",
+                    summary.files
+                )));
+            }
+            // The uploaded entry of that name (a file or a link) is replaced, never
+            // written through: the new file is created where nothing is.
+            let path = dest.join(ADAPTER_FILE);
+            if let Ok(meta) = fs::symlink_metadata(&path) {
+                if meta.is_dir() {
+                    return Err(RegistryError::Invalid(format!(
+                        "the upload has a folder named {ADAPTER_FILE}, the adapter's name"
+                    )));
+                }
+                fs::remove_file(&path).map_err(|e| {
+                    RegistryError::Internal(format!("cannot replace {ADAPTER_FILE}: {e}"))
+                })?;
+            }
+            use std::io::Write;
+            fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+                .and_then(|mut f| f.write_all(ORIGINAL_TASK_ADAPTER.as_bytes()))
+                .map_err(|e| RegistryError::Internal(format!("cannot add the adapter: {e}")))?;
+            // The summary is the packed folder's, adapter included.
+            return Ok(summary);
+        }
+    })
 }
 
 /// Checks `files` (every rule of [`crate::botfiles`]), stores them as a bundle and
@@ -38,12 +91,9 @@ pub async fn store_upload(
     let packed = blocking(move || {
         let (_tmp, dest) = scratch_dir(&scratch)?;
         let limits = BundleLimits::default();
-        let summary = match &files {
-            BotFiles::Map(map) => botfiles::write_files(map, &dest, &limits)?,
-            BotFiles::Archive(bytes) => botfiles::unpack_archive(bytes, &dest, &limits)?,
-        };
+        let summary = write_upload(&files, &dest, &limits)?;
         let packed = botfiles::pack_dir(&dest, &limits, &skip_nothing)?;
-        if packed.summary != summary {
+        if !matches!(files, BotFiles::OriginalTask(_)) && packed.summary != summary {
             return Err(RegistryError::Internal(format!(
                 "the files packed again give {:?}, not {summary:?}",
                 packed.summary

@@ -1504,3 +1504,177 @@ mod tests {
         }
     }
 }
+
+/// Competition `c` as the files of a folder that `competition create` (or the
+/// organiser's page) takes back: `competition.toml` naming `mazes/SET/NAME.txt`, and
+/// those mazes; each as (relative path, text), the competition file first. Private and
+/// public mazes are in it: it is for the competition's organisers only.
+///
+/// # Errors
+/// [`RegistryError::Conflict`] for the default competition (nothing to export); a maze
+/// gone; the database.
+pub async fn export_files(storage: &Storage, c: &CompetitionRow) -> Result<Vec<(String, String)>> {
+    let (Some(opens), Some(closes)) = (c.opens_at, c.closes_at) else {
+        return Err(RegistryError::Conflict(
+            "the default competition is the server's ranking: there is nothing to export".into(),
+        ));
+    };
+    let mut sets: crate::competition::MazeSets<String> = crate::competition::MazeSets {
+        practice: Vec::new(),
+        public: Vec::new(),
+        private: Vec::new(),
+    };
+    let mut mazes: Vec<(String, String)> = Vec::new();
+    for m in storage.competition_mazes(c.competition_id).await? {
+        let layout = storage
+            .get_maze(m.maze_id)
+            .await?
+            .ok_or_else(|| RegistryError::Internal(format!("maze {} is gone", m.maze_id)))?
+            .layout;
+        let stem: String = m
+            .name
+            .chars()
+            .map(|ch| {
+                if ch.is_ascii_alphanumeric() || "-_.".contains(ch) {
+                    ch
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let stem = stem.trim_start_matches('.').to_string();
+        let folder = format!("mazes/{}", m.maze_set);
+        let mut rel = format!("{folder}/{stem}.txt");
+        let mut n = 2;
+        while mazes.iter().any(|(p, _)| *p == rel) {
+            rel = format!("{folder}/{stem}-{n}.txt");
+            n += 1;
+        }
+        match m.maze_set.as_str() {
+            "practice" => sets.practice.push(rel.clone()),
+            "public" => sets.public.push(rel.clone()),
+            _ => sets.private.push(rel.clone()),
+        }
+        mazes.push((rel, layout));
+    }
+    let spec = Spec {
+        name: c.name.clone(),
+        title: c.title.clone(),
+        description: c.description.clone(),
+        rules: c.rules.clone(),
+        opens_at: Timestamp(opens),
+        closes_at: Timestamp(closes),
+        freeze_hours: c.freeze_ms.map(|ms| ms as f64 / 3_600_000.0),
+        repeats: c.repeats as u32,
+        final_repeats: c.final_repeats as u32,
+        versions_per_day: c.versions_per_day as u32,
+        practice_per_day: c.practice_per_day as u32,
+        selection: Rule::parse(&c.selection).unwrap_or_default(),
+        max_selected: c.max_selected as u32,
+        reveal_private_mazes: c.reveal_private_mazes,
+        limits: c.limit_set(),
+        mazes: sets,
+    };
+    let text = toml::to_string(&spec).map_err(|e| {
+        RegistryError::Internal(format!("cannot write the competition as TOML: {e}"))
+    })?;
+    let mut files = vec![(
+        "competition.toml".to_string(),
+        format!(
+            "# Exported by mazearena {}\n{text}",
+            crate::runner::ENGINE_VERSION
+        ),
+    )];
+    files.extend(mazes);
+    Ok(files)
+}
+
+/// `files` (relative path, text) as a `.tar.gz` archive under folder `top`.
+///
+/// # Errors
+/// Writing the archive in memory.
+pub fn tar_gz(top: &str, files: &[(String, String)]) -> std::io::Result<Vec<u8>> {
+    let gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    let mut tar = tar::Builder::new(gz);
+    for (rel, text) in files {
+        let mut header = tar::Header::new_gnu();
+        header.set_size(text.len() as u64);
+        header.set_mode(0o644);
+        header.set_mtime(0);
+        header.set_cksum();
+        tar.append_data(&mut header, format!("{top}/{rel}"), text.as_bytes())?;
+    }
+    tar.into_inner()?.finish()
+}
+
+/// What a rejudge is asked to play again, and why.
+#[derive(Debug, Clone, serde::Deserialize, utoipa::ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RejudgeRequest {
+    /// Play again every ranking match of this bot version (its id) ...
+    #[serde(default)]
+    pub bot_version_id: Option<i64>,
+    /// ... or every ranking match on this maze (one of the competition's).
+    #[serde(default)]
+    pub maze_id: Option<i64>,
+    /// Why (kept with the rejudge; 1 to 500 characters).
+    pub reason: String,
+}
+
+/// Plays again the ranking matches of competition `c` that `request` names (a version
+/// entered in it, or one of its mazes), for `requested_by` (`admin` or
+/// `organiser:ID`); the earlier records are kept, marked superseded, and the boards and
+/// results are counted again as the matches are played.
+///
+/// # Errors
+/// [`RegistryError::Invalid`] for a request naming neither or both, a version not in the
+/// competition or a maze not in it, or no reason; the database.
+pub async fn rejudge(
+    storage: &Storage,
+    c: &CompetitionRow,
+    request: &RejudgeRequest,
+    requested_by: &str,
+) -> Result<crate::storage::rejudges::RejudgeRow> {
+    use crate::storage::rejudges::RejudgeTarget;
+    let reason = request.reason.trim();
+    if reason.is_empty() || reason.chars().count() > 500 || reason.chars().any(char::is_control) {
+        return Err(RegistryError::Invalid(
+            "reason: 1 to 500 characters on one line (why the matches are played again)".into(),
+        ));
+    }
+    if c.kind != "competition" {
+        return Err(RegistryError::Conflict(
+            "the default competition has no ranking matches to rejudge".into(),
+        ));
+    }
+    let target = match (request.bot_version_id, request.maze_id) {
+        (Some(v), None) => {
+            let entered = storage.competition_entries(c.competition_id).await?;
+            let version = storage.get_bot_version(v).await?;
+            if !version.is_some_and(|row| entered.iter().any(|e| e.bot_id == row.bot_id)) {
+                return Err(RegistryError::Invalid(format!(
+                    "version id {v} is not a version of a bot entered in {}",
+                    c.name
+                )));
+            }
+            RejudgeTarget::Version(v)
+        }
+        (None, Some(m)) => {
+            let mazes = storage.competition_mazes(c.competition_id).await?;
+            if !mazes.iter().any(|x| x.maze_id == m) {
+                return Err(RegistryError::Invalid(format!(
+                    "maze {m} is not one of {}'s mazes",
+                    c.name
+                )));
+            }
+            RejudgeTarget::Maze(m)
+        }
+        _ => {
+            return Err(RegistryError::Invalid(
+                "name either a version (`bot_version_id`) or a maze (`maze_id`) to play again"
+                    .into(),
+            ));
+        }
+    };
+    Ok(storage.rejudge(c, target, reason, requested_by).await?)
+}

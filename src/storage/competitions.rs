@@ -555,6 +555,31 @@ impl Storage {
         )
     }
 
+    /// Every organiser: id, name and when it was registered (unix ms), oldest first.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn list_organisers(&self) -> Result<Vec<(i64, String, i64)>> {
+        Ok(sqlx::query_as(
+            "select organiser_id, name, created_at from organiser order by organiser_id",
+        )
+        .fetch_all(self.pool())
+        .await?)
+    }
+
+    /// The name of organiser `organiser_id`.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn organiser_name(&self, organiser_id: i64) -> Result<Option<String>> {
+        Ok(
+            sqlx::query_scalar("select name from organiser where organiser_id = $1")
+                .bind(organiser_id)
+                .fetch_optional(self.pool())
+                .await?,
+        )
+    }
+
     /// The organiser named `name`.
     ///
     /// # Errors

@@ -100,6 +100,17 @@ impl Storage {
     pub async fn rotate_entrant_key(&self, entrant_id: i64, key_hash: &str) -> Result<()> {
         let _turn = self.write_turn().await;
         let mut tx = self.begin_write().await?;
+        // The browser sessions opened with the old key or with its bots' owner tokens
+        // end with them.
+        sqlx::query(
+            "delete from web_session where key_hash in (
+                 select key_hash from entrant where entrant_id = $1
+                 union all
+                 select owner_token_hash from bot where entrant_id = $1)",
+        )
+        .bind(entrant_id)
+        .execute(&mut *tx)
+        .await?;
         sqlx::query("update entrant set key_hash = $1, key_rotated_at = $2 where entrant_id = $3")
             .bind(key_hash)
             .bind(now_ms())

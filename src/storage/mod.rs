@@ -19,7 +19,9 @@ pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
 pub mod records;
+pub mod rejudges;
 pub mod retries;
+pub mod sessions;
 pub mod tournaments;
 pub mod workers;
 

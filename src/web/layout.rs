@@ -27,7 +27,8 @@ pub fn page(title: &str, body: Markup) -> String {
                     a href="/bots" { "Bots" }
                     a href="/mazes" { "Mazes" }
                     a href="/workers" { "Workers" }
-                    a href="/api/openapi.json" { "API" }
+                    a href="/api" { "API" }
+                    a.me href="/me" { "My page" }
                 }
                 main { (body) }
             }

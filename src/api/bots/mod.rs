@@ -1,7 +1,7 @@
 //! Bots: register (with files), upload new versions (which resumes a paused bot), list,
 //! show, and resume a paused bot (admin).
 
-mod upload;
+pub(crate) mod upload;
 
 use std::collections::BTreeMap;
 
@@ -17,7 +17,7 @@ use super::error::{ApiError, ApiResult, AppPath, ErrorBody};
 use super::{AppState, MAX_UPLOAD_BYTES};
 use crate::registry;
 use crate::storage::bots::BotVersionRow;
-use upload::read_upload;
+use upload::{Upload, read_upload};
 
 pub use crate::registry::bots::{MAX_COMMAND_CHARS, MAX_NAME_CHARS};
 
@@ -40,8 +40,16 @@ pub struct BotUpload {
     /// The bot's unique name (registration only): letters, digits, `-`, `_`, `.`.
     #[serde(default)]
     pub name: Option<String>,
-    /// The command that runs the bot in its directory, e.g. `python3 bot.py`.
+    /// The command that runs the bot in its directory, e.g. `python3 bot.py` (may be
+    /// left out with `original_task`).
+    #[serde(default)]
     pub command: String,
+    /// The files are a `robot.py` of the original task (and its own modules): the server
+    /// adds its adapter, `udacity_adapter.py`, and the command defaults to `python3
+    /// udacity_adapter.py robot.py` (`python ...` with a `runtime`). (Form: `original_task`
+    /// set to `true` or `on`.)
+    #[serde(default)]
+    pub original_task: bool,
     /// Small bots: file name -> content.
     #[serde(default)]
     pub files: Option<BTreeMap<String, String>>,
@@ -213,10 +221,26 @@ async fn create_bot(
         .extensions()
         .get::<axum::extract::ConnectInfo<std::net::SocketAddr>>()
         .map(|c| c.0);
-    super::check_registration_rate(&state, &caller, client)?;
+    let upload = read_upload(&state, request).await?;
+    let created = register_bot(&state, &caller, client, upload).await?;
+    Ok((StatusCode::CREATED, axum::Json(created)))
+}
+
+/// Registers a bot from `upload` for `caller` (from address `client`): the API's and
+/// the submission page's one way.
+///
+/// # Errors
+/// The registration limit or mode; a bad upload; a taken name.
+pub(crate) async fn register_bot(
+    state: &AppState,
+    caller: &Caller,
+    client: Option<std::net::SocketAddr>,
+    upload: Upload,
+) -> ApiResult<BotCreated> {
+    super::check_registration_rate(state, caller, client)?;
     // With an entrant's key the bot is the entrant's; without one, only an open server
     // takes it.
-    let entrant = match &caller {
+    let entrant = match caller {
         Caller::Token(hash) => state.storage.entrant_by_key(hash).await?,
         _ => None,
     };
@@ -230,8 +254,8 @@ async fn create_bot(
             ));
         }
     }
-    let (name, submission) = read_upload(&state, request).await?.submission()?;
-    check_runtime(&state, submission.runtime.as_deref())?;
+    let (name, submission) = upload.submission()?;
+    check_runtime(state, submission.runtime.as_deref())?;
     let name = name.ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
     let registered =
         registry::bots::register(&state.storage, &name, submission, &state.settings.scratch())
@@ -245,15 +269,12 @@ async fn create_bot(
     state.wake.notify_waiters();
     let row = registered.version;
     let token = registered.owner_token;
-    Ok((
-        StatusCode::CREATED,
-        axum::Json(BotCreated {
-            bot_id: row.bot_id,
-            name,
-            owner_token: token,
-            version: row.into(),
-        }),
-    ))
+    Ok(BotCreated {
+        bot_id: row.bot_id,
+        name,
+        owner_token: token,
+        version: row.into(),
+    })
 }
 
 /// Upload a new version of a bot (owner token or admin); a paused bot is resumed.
@@ -280,6 +301,26 @@ async fn create_bot_version(
         return Err(ApiError::NotFound(format!("no bot {id}")));
     }
     caller.require_owner(&state, id).await?;
+    let upload = read_upload(&state, request).await?;
+    let row = add_bot_version(&state, &caller, id, upload).await?;
+    Ok((StatusCode::CREATED, axum::Json(row.into())))
+}
+
+/// Adds a version from `upload` to bot `id` for `caller` (its owner or the admin): the
+/// API's and the submission page's one way.
+///
+/// # Errors
+/// No such bot; not its owner; the competition's close or quota; a bad upload.
+pub(crate) async fn add_bot_version(
+    state: &AppState,
+    caller: &Caller,
+    id: i64,
+    upload: Upload,
+) -> ApiResult<BotVersionRow> {
+    if state.storage.get_bot(id).await?.is_none() {
+        return Err(ApiError::NotFound(format!("no bot {id}")));
+    }
+    caller.require_owner(state, id).await?;
     let now = crate::storage::now_ms();
     let quotas = match registry::competitions::check_upload(&state.storage, id, now).await? {
         Ok(quotas) => quotas,
@@ -293,8 +334,8 @@ async fn create_bot_version(
             });
         }
     };
-    let (_, submission) = read_upload(&state, request).await?.submission()?;
-    check_runtime(&state, submission.runtime.as_deref())?;
+    let (_, submission) = upload.submission()?;
+    check_runtime(state, submission.runtime.as_deref())?;
     // The quotas are counted again where the version is added: uploads sent at once
     // all pass the check above before any is added.
     let row = registry::bots::add_version(
@@ -306,7 +347,7 @@ async fn create_bot_version(
     )
     .await?;
     state.wake.notify_waiters();
-    Ok((StatusCode::CREATED, axum::Json(row.into())))
+    Ok(row)
 }
 
 /// Refuses a runtime this server does not offer (422, with those it offers).

@@ -13,8 +13,10 @@ use crate::registry::bots::Submission;
 use crate::registry::bundles::BotFiles;
 use crate::runner::botenv;
 
-/// An upload, whichever way it came.
-pub(super) struct Upload {
+/// An upload, whichever way it came (JSON, the API's multipart form, or the
+/// submission page's form): the fields of [`BotUpload`].
+#[derive(Debug, Default)]
+pub(crate) struct Upload {
     pub name: Option<String>,
     pub command: String,
     pub build: Option<String>,
@@ -22,6 +24,12 @@ pub(super) struct Upload {
     pub files: Option<BTreeMap<String, String>>,
     pub archive: Option<Vec<u8>>,
     pub runtime: Option<String>,
+    pub original_task: bool,
+}
+
+/// Whether a form's checkbox value is set.
+pub(crate) fn checked(value: &str) -> bool {
+    matches!(value.trim(), "true" | "on" | "1" | "yes")
 }
 
 pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult<Upload> {
@@ -47,6 +55,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         let mut form = Multipart::from_request(request, state).await?;
         let (mut name, mut command, mut archive, mut build) = (None, None, None, None);
         let mut runtime = None;
+        let mut original_task = false;
         let mut env = Vec::new();
         while let Some(field) = form.next_field().await? {
             match field.name().unwrap_or("") {
@@ -54,6 +63,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "command" => command = Some(field.text().await?),
                 "build" => build = Some(field.text().await?),
                 "runtime" => runtime = Some(field.text().await?),
+                "original_task" => original_task = checked(&field.text().await?),
                 "env" => {
                     let text = field.text().await?;
                     env.push(botenv::parse_assignment(&text).map_err(env_error)?);
@@ -61,7 +71,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "archive" => archive = Some(field.bytes().await?.to_vec()),
                 other => {
                     return Err(ApiError::BadRequest(format!(
-                        "unknown form field {other:?}: expected name, command, build, env, runtime, archive"
+                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, archive"
                     )));
                 }
             }
@@ -70,11 +80,10 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
             name,
             build,
             env,
-            command: command.ok_or_else(|| {
-                ApiError::Unprocessable("the form needs a `command` field".into())
-            })?,
+            command: command.unwrap_or_default(),
             files: None,
             runtime,
+            original_task,
             archive: Some(archive.ok_or_else(|| {
                 ApiError::Unprocessable("the form needs an `archive` file field".into())
             })?),
@@ -99,6 +108,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         files: body.files,
         archive,
         runtime: body.runtime,
+        original_task: body.original_task,
     })
 }
 
@@ -108,7 +118,7 @@ fn env_error(e: botenv::BotEnvError) -> ApiError {
 
 impl Upload {
     /// The upload as a registry submission (its files sent one way or the other).
-    pub(super) fn submission(self) -> ApiResult<(Option<String>, Submission)> {
+    pub(crate) fn submission(self) -> ApiResult<(Option<String>, Submission)> {
         let files = match (self.files, self.archive) {
             (Some(_), Some(_)) => {
                 return Err(ApiError::Unprocessable(
@@ -123,15 +133,44 @@ impl Upload {
             (Some(map), None) => BotFiles::Map(map),
             (None, Some(bytes)) => BotFiles::Archive(bytes),
         };
+        let runtime = self.runtime.filter(|r| !r.trim().is_empty());
+        let mut command = self.command.trim().to_string();
+        let files = if self.original_task {
+            if command.is_empty() {
+                command = original_task_command(runtime.is_some());
+            }
+            BotFiles::OriginalTask(Box::new(files))
+        } else {
+            files
+        };
+        if command.is_empty() {
+            return Err(ApiError::Unprocessable(
+                "the bot needs a `command` (e.g. `python3 bot.py`), or `original_task` for a \
+                 robot.py of the original task"
+                    .into(),
+            ));
+        }
         Ok((
             self.name,
             Submission {
-                command: self.command,
-                build: self.build,
+                command,
+                build: self.build.filter(|b| !b.trim().is_empty()),
                 env: self.env,
                 files,
-                runtime: self.runtime.filter(|r| !r.trim().is_empty()),
+                runtime,
             },
         ))
     }
+}
+
+/// The command of an original-task robot: the adapter run by `python3` (the system's),
+/// or by `python` when the bot chose a runtime (a virtual environment has both names; a
+/// Python 2 one only `python`).
+pub(crate) fn original_task_command(with_runtime: bool) -> String {
+    let python = if with_runtime { "python" } else { "python3" };
+    format!(
+        "{python} {} {}",
+        crate::registry::bundles::ADAPTER_FILE,
+        crate::registry::bundles::ROBOT_FILE
+    )
 }

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use axum::Router;
 use axum::extract::State;
 use axum::response::Html;
-use axum::routing::get;
+use axum::routing::{get, post};
 use serde::Deserialize;
 
 use super::AppState;
@@ -23,8 +23,11 @@ use crate::storage::matches::{MatchCount, MatchFilter, MatchRow, Page};
 use crate::web::pages::{self as web, MatchLine, MatchPager, Pager, SortKey};
 use crate::web::viewer::ViewerData;
 
+mod account;
 mod board;
 mod competitions;
+mod forms;
+mod organise;
 
 /// How many tournaments the leaderboard lists, and recent matches a bot or maze page.
 const RECENT: i64 = 20;
@@ -46,6 +49,55 @@ pub(super) fn router() -> Router<AppState> {
         .route("/workers", get(workers_page))
         .route("/favicon.svg", get(favicon))
         .route("/favicon.ico", get(favicon))
+        .route("/api", get(api_page))
+        .route("/login", get(account::login_page).post(account::login))
+        .route("/logout", post(account::logout))
+        .route(
+            "/register",
+            get(account::register_page).post(account::register),
+        )
+        .route("/me", get(account::me_page))
+        .route("/me/practice", post(account::practice))
+        .route(
+            "/competitions/{name}/submit",
+            get(account::submit_page).post(account::submit).layer(
+                axum::extract::DefaultBodyLimit::max(super::MAX_UPLOAD_BYTES),
+            ),
+        )
+        .merge(organise::router())
+        .layer(axum::middleware::from_fn(super::session::refuse_cross_site))
+}
+
+/// The API's routes as a page: each path and method with its summary, from the OpenAPI
+/// document the handlers generate.
+async fn api_page() -> Html<String> {
+    let doc = super::openapi();
+    let mut routes = Vec::new();
+    for (path, item) in &doc.paths.paths {
+        for (method, op) in [
+            ("GET", &item.get),
+            ("POST", &item.post),
+            ("PUT", &item.put),
+            ("PATCH", &item.patch),
+            ("DELETE", &item.delete),
+        ] {
+            if let Some(op) = op {
+                let text = op
+                    .description
+                    .clone()
+                    .or_else(|| op.summary.clone())
+                    .unwrap_or_default();
+                let auth = op.security.as_ref().is_some_and(|s| !s.is_empty());
+                routes.push(web::ApiRoute {
+                    method,
+                    path: path.clone(),
+                    text,
+                    auth,
+                });
+            }
+        }
+    }
+    Html(web::api_routes(&routes))
 }
 
 /// The site's icon (an SVG, also for browsers that ask for `/favicon.ico`).
@@ -209,6 +261,7 @@ async fn matches_page(
 
 async fn match_page(
     State(state): State<AppState>,
+    visitor: super::session::Visitor,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<Html<String>> {
     let row = state
@@ -227,12 +280,14 @@ async fn match_page(
     } else {
         state.storage.get_record(id).await.ok().flatten()
     };
-    // Pages never use a token: the bot's stderr (its owner's) is left out, and the
-    // page's owner form fetches it from the API with the pasted token.
+    // The bot's stderr is its owner's: shown to a session that owns the bot (or the
+    // admin's); for anyone else it is left out, and the page's owner form fetches it
+    // from the API with a pasted token.
+    let owner = visitor.signed_in() && visitor.caller.owns(&state, row.bot_id).await?;
     let pruned = !hidden && row.trace_removed(stored.as_ref());
     if let Some(mut r) = stored
         .filter(|_| row.total_steps.is_some() && !pruned)
-        .map(MatchRecord::without_stderr)
+        .map(|r| if owner { r } else { r.without_stderr() })
     {
         let m = super::mazes::find_maze(&state, row.maze_id).await?;
         maze = mazefile::parse(m.layout.as_bytes()).ok();
@@ -244,14 +299,17 @@ async fn match_page(
         "match {id}: {} on {} (seed {})",
         line.row.bot_name, line.row.maze_name, line.row.seed
     );
+    let superseded = state.storage.superseded(id).await?;
     let viewer = record.as_ref().map(|r| ViewerData {
-        stderr_hidden: true,
+        stderr_hidden: !owner,
         ..ViewerData::new(title, r, maze.as_ref(), format!("match-{id}.json"))
     });
     Ok(Html(web::match_page(&web::MatchPage {
         line,
         viewer,
         pruned,
+        owner,
+        superseded,
     })))
 }
 

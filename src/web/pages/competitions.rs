@@ -135,6 +135,19 @@ pub fn competition(p: &CompetitionPage) -> String {
             }
         }
         @if !p.description.is_empty() { pre.text.description { (p.description) } }
+        @if c.kind != "default" && c.phase != "closed" && c.phase != "final" {
+            section.take-part #take-part {
+                h2 { "How to take part" }
+                ol {
+                    li { strong { "In the browser: " } a href="/register" { "register" } " (or " a href="/login" { "log in" } " with your key), then "
+                        a.button href={ "/competitions/" (c.name) "/submit" } { "upload your bot" }
+                        ". Upload your files or a .zip; for a " code { "robot.py" } " of the original task tick \"robot.py of the original task\" and upload only your own files. "
+                        a href="/me" { "Your page" } " shows the build, the validation match, your practice matches with your stderr, your rank and your quotas." }
+                    li { strong { "From a terminal: " } code { "mazearena login URL --key KEY" } ", then " code { "mazearena submit " (c.name) " ./my-bot" } " (see the README's \"Take part from the command line\")." }
+                    li { strong { "With curl: " } code { "POST /api/entrants" } ", " code { "POST /api/bots" } " with your key, then " code { "POST /api/competitions/" (c.name) "/entries" } " (the " a href="/api/openapi.json" { "API document" } ")." }
+                }
+            }
+        }
         @if !p.rules.is_empty() { h2 { "Rules" } pre.text.rules { (p.rules) } }
         @if !p.settings.is_empty() {
             table.data.settings { tbody { @for (k, v) in &p.settings { tr { th { (k) } td { (v) } } } } }
@@ -187,7 +200,8 @@ pub fn competition(p: &CompetitionPage) -> String {
         }
         @if c.kind != "default" {
             h2 { "My submissions" }
-            p.muted { "Paste your entrant key to see your versions, their status, your own public-set scores and your quotas (the key stays in this page and is sent only to this server's API)." }
+            p { a href="/me" { "Log in and see your page" } " for everything about your entry." }
+            p.muted { "Or paste your entrant key to see your versions, their status, your own public-set scores and your quotas (the key stays in this page and is sent only to this server's API)." }
             form.inline #mine-form data-competition=(c.name) {
                 input #mine-key type="password" placeholder="entrant key" autocomplete="off";
                 button type="submit" { "Show" }

@@ -113,6 +113,10 @@ pub struct MatchPage<'a> {
     pub viewer: Option<ViewerData<'a>>,
     /// True when its trace was removed (an old practice match, pruned).
     pub pruned: bool,
+    /// True when the visitor's session owns the bot: its stderr is in the viewer.
+    pub owner: bool,
+    /// Earlier outcomes that rejudges superseded: status, score, when it had ended.
+    pub superseded: Vec<crate::storage::rejudges::SupersededRow>,
 }
 
 /// A match's page: its result, and the replay viewer.
@@ -137,6 +141,10 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
             a href={ "/api/matches/" (r.match_id) } { "JSON" }
         }
         @match &p.viewer {
+            Some(data) if p.owner => {
+                (embed(data))
+                p.muted.owner-note { "You own this bot: its stderr is shown in the viewer, step by step and at the end." }
+            },
             Some(data) => {
                 (embed(data))
                 h2 { "Owner's stderr" }
@@ -154,12 +162,37 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
                 } @else if p.pruned {
                     p.muted { "Its replay was removed to save space (an old practice match); its result stays." }
                 } @else {
-                    p.muted { "Not played yet." }
+                    p.muted { "Not played yet: this page reloads every 5 seconds until it is." }
                 }
             }
         }
+        @if !p.superseded.is_empty() {
+            h2 { "Earlier outcomes" }
+            p.muted { "This match was played again by a rejudge; its earlier outcomes are kept here and no longer count." }
+            table.data.superseded {
+                thead { tr { th.num { "rejudge" } th { "status" } th.num { "score" } th.num { "steps" } th { "ended" } } }
+                tbody { @for s in &p.superseded {
+                    tr.superseded {
+                        td.num { (s.rejudge_id) }
+                        td { (status(&s.status)) " " span.muted { "superseded" } }
+                        td.num { @if r.maze_hidden { "hidden" } @else { (score(&s.status, s.score)) } }
+                        td.num { (opt(s.total_steps)) }
+                        td { (s.finished_at.map(super::super::layout::time).unwrap_or_default()) }
+                    }
+                } }
+            }
+        }
     };
-    page(&title, body)
+    let html = page(&title, body);
+    if matches!(r.status.to_string().as_str(), "queued" | "running") {
+        html.replacen(
+            "<meta charset=\"utf-8\">",
+            "<meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"5\">",
+            1,
+        )
+    } else {
+        html
+    }
 }
 
 /// A tournament's page.

@@ -284,3 +284,33 @@ mod tests {
         assert!(!html.contains("older") && !html.contains("more than"));
     }
 }
+
+/// A route of the API, for its page.
+#[derive(Debug, Clone)]
+pub struct ApiRoute {
+    /// `GET`, `POST`, ...
+    pub method: &'static str,
+    /// Its path.
+    pub path: String,
+    /// What it does.
+    pub text: String,
+    /// Whether it takes a key.
+    pub auth: bool,
+}
+
+/// The API's page: every route, and where the machine-readable document is.
+pub fn api_routes(routes: &[ApiRoute]) -> String {
+    page(
+        "API",
+        html! {
+            h1 { "API" }
+            p.lead { "JSON over HTTP. Routes marked with a key take " code { "Authorization: Bearer KEY" } " (an entrant's key, a bot's owner token, an organiser's key or the admin token). Errors are " code { "{\"error\":{\"code\":..,\"message\":..}}" } ". The machine-readable description: " a href="/api/openapi.json" { "/api/openapi.json" } " (OpenAPI 3.1)." }
+            table.data.api-routes {
+                thead { tr { th { "method" } th { "path" } th { "key" } th { "what it does" } } }
+                tbody { @for r in routes {
+                    tr { td { code { (r.method) } } td { code { (r.path) } } td { @if r.auth { "key" } } td { (r.text) } }
+                } }
+            }
+        },
+    )
+}

@@ -5,12 +5,15 @@
 //! Lists are plain HTML tables with links (sorting and paging are links too), so they
 //! work without JavaScript; scripts only add live progress and the owner's logs.
 
+pub mod account;
 mod board;
 mod competitions;
 mod detail;
 mod lists;
+pub mod organise;
 mod ranks;
 
+pub use account::message;
 pub use board::{CompetitionBoard, LeaderboardPage, SortKey, StandingsSection, leaderboard};
 pub use competitions::{
     CompetitionPage, CompetitionSummary, MY_SUBMISSIONS_JS, competition, competitions,
@@ -20,5 +23,6 @@ pub use detail::{
     match_page, maze, tournament,
 };
 pub use lists::{
-    MatchLine, MatchPager, Pager, bots, match_table, matches, mazes, tournaments, workers,
+    ApiRoute, MatchLine, MatchPager, Pager, api_routes, bots, match_table, matches, mazes,
+    tournaments, workers,
 };

@@ -1,0 +1,535 @@
+//! The participant's pages: `/login`, `/logout`, `/register`, `/me` (with its practice
+//! button) and `/competitions/{name}/submit`. Each form goes through the operation the
+//! API's route of the same purpose calls, with the same checks, quotas and messages.
+
+use std::collections::BTreeMap;
+
+use axum::extract::{FromRequest, Multipart, Query, Request, State};
+use axum::http::StatusCode;
+use axum::response::{Html, IntoResponse, Response};
+use serde::Deserialize;
+
+use super::super::AppState;
+use super::super::auth::{Caller, hash_token};
+use super::super::bots::upload::{Upload, checked};
+use super::super::error::{ApiError, AppPath};
+use super::super::session::{self, Visitor};
+use super::forms::{
+    PageError, PageResult, client_of, local_next, login_first, read_form, see_other,
+};
+use crate::storage::bots::build_status;
+use crate::storage::matches::{MatchFilter, Page};
+use crate::web::pages::account;
+
+/// How many of the visitor's latest matches "me" lists.
+const MY_MATCHES: i64 = 20;
+
+/// Query of `/login`.
+#[derive(Debug, Deserialize)]
+pub(super) struct NextQuery {
+    next: Option<String>,
+}
+
+pub(super) async fn login_page(visitor: Visitor, Query(q): Query<NextQuery>) -> Response {
+    let next = local_next(q.next.as_deref());
+    if visitor.signed_in() {
+        return see_other(&next, None);
+    }
+    Html(account::login(None, &next)).into_response()
+}
+
+/// The login form.
+#[derive(Debug, Deserialize)]
+struct LoginForm {
+    key: String,
+    next: Option<String>,
+}
+
+pub(super) async fn login(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    request: Request,
+) -> PageResult {
+    let client = client_of(&request);
+    let secure = session::secure(&state, request.headers());
+    let form: LoginForm = read_form(&state, request).await?;
+    let next = local_next(form.next.as_deref());
+    let again = |message: &str| account::login(Some(message), &next);
+    // Guessing is limited per address, like registration (right or wrong tries alike).
+    if let (Some(limiter), Some(addr)) = (&state.settings.logins, client)
+        && let Err(not_until) = limiter.check_key(&addr.ip())
+    {
+        use governor::clock::Clock;
+        let wait = not_until.wait_time_from(governor::clock::DefaultClock::default().now());
+        return Err(PageError::from(ApiError::TooManyRequests {
+            message: format!(
+                "{} has tried to log in as often as it may this hour; try again in {} s",
+                addr.ip(),
+                wait.as_secs() + 1
+            ),
+            retry_after_secs: wait.as_secs() + 1,
+        })
+        .with_page(again));
+    }
+    let key = form.key.trim();
+    let key_hash = hash_token(key);
+    if key.is_empty() || !session::known_key(&state, &key_hash).await? {
+        return Err(PageError::new(
+            StatusCode::UNAUTHORIZED,
+            "this key is not known on this server: check that you pasted all of it",
+        )
+        .with_page(again));
+    }
+    // A new session every time: a session the browser had before (planted or not)
+    // ends here.
+    if let Some(old) = &visitor.session {
+        state.storage.end_session(&old.hash).await?;
+    }
+    let cookie = session::open(&state, &key_hash, secure).await?;
+    Ok(see_other(&next, Some(cookie)))
+}
+
+/// A form with nothing but its anti-forgery token.
+#[derive(Debug, Deserialize)]
+struct TokenForm {
+    csrf: Option<String>,
+}
+
+pub(super) async fn logout(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    request: Request,
+) -> PageResult {
+    let secure = session::secure(&state, request.headers());
+    let form: TokenForm = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    if let Some(s) = &visitor.session {
+        state.storage.end_session(&s.hash).await?;
+    }
+    let gone = session::cookie(String::new(), secure, std::time::Duration::ZERO);
+    Ok(see_other("/", Some(gone)))
+}
+
+async fn register_page_data(state: &AppState) -> PageResult<account::RegisterPage> {
+    let mode = state.storage.registration().await?;
+    Ok(account::RegisterPage {
+        mode: super::super::entrants::registration_name(&mode).into(),
+    })
+}
+
+pub(super) async fn register_page(State(state): State<AppState>) -> PageResult<Html<String>> {
+    let p = register_page_data(&state).await?;
+    Ok(Html(account::register(&p, None, "", "")))
+}
+
+/// The registration form: the fields of `POST /api/entrants` (members one per line).
+#[derive(Debug, Deserialize)]
+struct RegisterForm {
+    name: String,
+    #[serde(default)]
+    members: String,
+    invite_code: Option<String>,
+}
+
+pub(super) async fn register(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    request: Request,
+) -> PageResult {
+    let client = client_of(&request);
+    let secure = session::secure(&state, request.headers());
+    let form: RegisterForm = read_form(&state, request).await?;
+    let p = register_page_data(&state).await?;
+    let body = super::super::entrants::EntrantRequest {
+        name: form.name.trim().to_string(),
+        members: form
+            .members
+            .lines()
+            .map(str::trim)
+            .filter(|m| !m.is_empty())
+            .map(str::to_string)
+            .collect(),
+        invite_code: form.invite_code.filter(|c| !c.trim().is_empty()),
+    };
+    let created = super::super::entrants::register(&state, &Caller::Anonymous, client, body)
+        .await
+        .map_err(|e| {
+            PageError::from(e)
+                .with_page(|m| account::register(&p, Some(m), &form.name, &form.members))
+        })?;
+    if let Some(old) = &visitor.session {
+        state.storage.end_session(&old.hash).await?;
+    }
+    let cookie = session::open(&state, &hash_token(&created.key), secure).await?;
+    let mut response = Html(account::registered(&created.name, &created.key)).into_response();
+    if let Ok(v) = axum::http::HeaderValue::from_str(&cookie.to_string()) {
+        response
+            .headers_mut()
+            .append(axum::http::header::SET_COOKIE, v);
+    }
+    // The key is in this page: no cache keeps it.
+    response.headers_mut().insert(
+        axum::http::header::CACHE_CONTROL,
+        axum::http::HeaderValue::from_static("no-store"),
+    );
+    Ok(response)
+}
+
+/// Who the caller is, in words, and its kind.
+async fn who(state: &AppState, caller: &Caller) -> PageResult<(String, &'static str)> {
+    Ok(match caller {
+        Caller::Admin => ("the admin".into(), "admin"),
+        Caller::Organiser(id) => (
+            format!(
+                "organiser {}",
+                state
+                    .storage
+                    .organiser_name(*id)
+                    .await?
+                    .unwrap_or_else(|| id.to_string())
+            ),
+            "organiser",
+        ),
+        Caller::Token(hash) => match state.storage.entrant_by_key(hash).await? {
+            Some(e) => (format!("entrant {}", e.name), "entrant"),
+            None => ("a bot's owner".into(), "owner"),
+        },
+        Caller::Anonymous => ("nobody".into(), "anonymous"),
+    })
+}
+
+pub(super) async fn me_page(State(state): State<AppState>, visitor: Visitor) -> PageResult {
+    if let Some(r) = login_first(&visitor, "/me") {
+        return Ok(r);
+    }
+    let caller = &visitor.caller;
+    let (who, kind) = who(&state, caller).await?;
+    let owned = match caller {
+        Caller::Token(hash) => state.storage.bots_owned_by(hash).await?,
+        _ => Vec::new(),
+    };
+    let mut live = false;
+    let mut bots = Vec::new();
+    for (bot_id, name) in &owned {
+        let mut versions = Vec::new();
+        for v in state.storage.bot_versions(*bot_id).await?.into_iter().rev() {
+            live |= v.build_status == build_status::BUILDING;
+            versions.push(account::MyVersion {
+                version: v.version,
+                created_at: v.created_at,
+                command: v.command,
+                build_status: v.build_status,
+                log: v.build_log,
+            });
+        }
+        bots.push(account::MyBot {
+            bot_id: *bot_id,
+            name: name.clone(),
+            versions,
+        });
+    }
+    let mut competitions = Vec::new();
+    if kind == "entrant" {
+        let now = crate::storage::now_ms();
+        for c in state.storage.list_competitions().await? {
+            if c.kind != "competition" {
+                continue;
+            }
+            let phase = crate::registry::competitions::phase(&c, now);
+            let mine = super::super::competitions::my_submissions(&state, caller, &c.name).await?;
+            if phase.is_closed() && mine.bot_id.is_none() {
+                continue;
+            }
+            live |= mine
+                .versions
+                .iter()
+                .any(|v| v.status == "playing" || v.build_status == build_status::BUILDING);
+            let practice_mazes = state
+                .storage
+                .competition_mazes(c.competition_id)
+                .await?
+                .into_iter()
+                .filter(|m| m.maze_set == "practice")
+                .map(|m| (m.maze_id, m.name))
+                .collect();
+            competitions.push(account::MyCompetition {
+                name: c.name.clone(),
+                title: c.title.clone(),
+                phase: phase.as_str().to_string(),
+                taking_part: !phase.is_closed(),
+                bot_id: mine.bot_id,
+                versions: mine
+                    .versions
+                    .into_iter()
+                    .map(|v| account::MySubmission {
+                        version: v.version,
+                        build_status: v.build_status,
+                        status: v.status,
+                        public: v.public,
+                    })
+                    .collect(),
+                versions_quota: mine.versions_quota,
+                practice_quota: mine.practice_quota,
+                practice_mazes,
+                final_result: mine.final_result,
+            });
+        }
+    }
+    let mut matches = Vec::new();
+    for (bot_id, _) in &owned {
+        let filter = MatchFilter {
+            bot_id: Some(*bot_id),
+            hide_sealed: true,
+            ..MatchFilter::default()
+        };
+        let page = Page {
+            offset: 0,
+            limit: MY_MATCHES,
+        };
+        matches.extend(state.storage.list_matches(&filter, page).await?.0);
+    }
+    matches.sort_by_key(|m| std::cmp::Reverse(m.match_id));
+    matches.truncate(MY_MATCHES as usize);
+    live |= matches
+        .iter()
+        .any(|m| matches!(m.status.to_string().as_str(), "queued" | "running"));
+    let page = account::MePage {
+        who,
+        kind: kind.into(),
+        csrf: visitor
+            .session
+            .as_ref()
+            .map(|s| s.csrf.clone())
+            .unwrap_or_default(),
+        notice: None,
+        competitions,
+        bots,
+        matches: matches.into_iter().map(super::line).collect(),
+        live,
+    };
+    Ok(Html(account::me(&page)).into_response())
+}
+
+/// The practice button's form: the fields of `POST /api/matches`.
+#[derive(Debug, Deserialize)]
+struct PracticeForm {
+    csrf: Option<String>,
+    bot_id: i64,
+    maze_id: i64,
+}
+
+pub(super) async fn practice(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    request: Request,
+) -> PageResult {
+    let form: PracticeForm = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    let queued = super::super::matches::queue_match(
+        &state,
+        &visitor.caller,
+        super::super::matches::MatchRequest {
+            bot_id: form.bot_id,
+            maze_id: form.maze_id,
+            seed: None,
+        },
+    )
+    .await?;
+    Ok(see_other(&format!("/matches/{}", queued.match_id), None))
+}
+
+/// The submission page's data for an entrant in competition `name`.
+async fn submit_data(
+    state: &AppState,
+    visitor: &Visitor,
+    name: &str,
+) -> PageResult<account::SubmitPage> {
+    let c = super::super::competitions::find(state, name).await?;
+    if c.kind != "competition" {
+        return Err(PageError::new(
+            StatusCode::CONFLICT,
+            "the server's default ranking takes no submissions: choose a competition",
+        ));
+    }
+    let e = super::super::competitions::entrant(state, &visitor.caller).await?;
+    let now = crate::storage::now_ms();
+    if crate::registry::competitions::phase(&c, now).is_closed() {
+        return Err(PageError::new(
+            StatusCode::CONFLICT,
+            format!("competition {} is closed: it takes no new versions", c.name),
+        ));
+    }
+    let bot = state
+        .storage
+        .competition_entries(c.competition_id)
+        .await?
+        .into_iter()
+        .find(|x| x.entrant_id == e.entrant_id)
+        .map(|x| (x.bot_id, x.bot_name));
+    let quota = crate::registry::competitions::version_quota(&state.storage, &c, e.entrant_id, now)
+        .await?
+        .message;
+    let runtimes = state
+        .runtimes
+        .iter()
+        .filter(|r| r.kind == "operator")
+        .map(|r| {
+            let programs: Vec<String> = r
+                .programs
+                .iter()
+                .map(|p| format!("{} {}", p.program, p.version))
+                .collect();
+            let packages: Vec<String> = r.packages.iter().take(8).map(|p| p.name.clone()).collect();
+            let mut what = programs.join(", ");
+            if !packages.is_empty() {
+                what.push_str(&format!(" with {}", packages.join(", ")));
+            }
+            (r.name.clone(), what)
+        })
+        .collect();
+    Ok(account::SubmitPage {
+        competition: c.name,
+        title: c.title,
+        csrf: visitor
+            .session
+            .as_ref()
+            .map(|s| s.csrf.clone())
+            .unwrap_or_default(),
+        bot,
+        runtimes,
+        quota,
+        error: None,
+    })
+}
+
+pub(super) async fn submit_page(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath(name): AppPath<String>,
+) -> PageResult {
+    if let Some(r) = login_first(&visitor, &format!("/competitions/{name}/submit")) {
+        return Ok(r);
+    }
+    let p = submit_data(&state, &visitor, &name).await?;
+    Ok(Html(account::submit(&p)).into_response())
+}
+
+/// Reads the submission form: its first field must be the anti-forgery token, checked
+/// before any file is read.
+async fn read_submission(
+    state: &AppState,
+    visitor: &Visitor,
+    request: Request,
+) -> PageResult<Upload> {
+    let mut form = Multipart::from_request(request, state)
+        .await
+        .map_err(ApiError::from)?;
+    let mut upload = Upload::default();
+    let mut files: BTreeMap<String, String> = BTreeMap::new();
+    let mut first = true;
+    while let Some(field) = form.next_field().await.map_err(ApiError::from)? {
+        let name = field.name().unwrap_or("").to_string();
+        if first {
+            first = false;
+            let token = if name == session::CSRF_FIELD {
+                Some(field.text().await.map_err(ApiError::from)?)
+            } else {
+                None
+            };
+            visitor.check_csrf(token.as_deref())?;
+            continue;
+        }
+        match name.as_str() {
+            "name" => upload.name = Some(field.text().await.map_err(ApiError::from)?.trim().into()),
+            "command" => upload.command = field.text().await.map_err(ApiError::from)?,
+            "build" => upload.build = Some(field.text().await.map_err(ApiError::from)?),
+            "runtime" => upload.runtime = Some(field.text().await.map_err(ApiError::from)?),
+            "original_task" => {
+                upload.original_task = checked(&field.text().await.map_err(ApiError::from)?)
+            }
+            "files" => {
+                let file_name = field.file_name().unwrap_or("").to_string();
+                let bytes = field.bytes().await.map_err(ApiError::from)?;
+                if file_name.is_empty() && bytes.is_empty() {
+                    continue; // no file chosen
+                }
+                let text = String::from_utf8(bytes.to_vec()).map_err(|_| {
+                    PageError::new(
+                        StatusCode::UNPROCESSABLE_ENTITY,
+                        format!(
+                            "{file_name} is not a text file: send files that are not text in an \
+                             archive (.zip or .tar.gz)"
+                        ),
+                    )
+                })?;
+                if files.insert(file_name.clone(), text).is_some() {
+                    return Err(PageError::new(
+                        StatusCode::UNPROCESSABLE_ENTITY,
+                        format!("two files are named {file_name}"),
+                    ));
+                }
+            }
+            "archive" => {
+                let bytes = field.bytes().await.map_err(ApiError::from)?;
+                if !bytes.is_empty() {
+                    upload.archive = Some(bytes.to_vec());
+                }
+            }
+            other => {
+                return Err(PageError::new(
+                    StatusCode::BAD_REQUEST,
+                    format!("the form has an unknown field {other:?}"),
+                ));
+            }
+        }
+    }
+    if first {
+        visitor.check_csrf(None)?;
+    }
+    if !files.is_empty() {
+        upload.files = Some(files);
+    }
+    if upload.files.is_some() && upload.archive.is_some() {
+        return Err(PageError::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "send either files or an archive, not both",
+        ));
+    }
+    Ok(upload)
+}
+
+pub(super) async fn submit(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath(name): AppPath<String>,
+    request: Request,
+) -> PageResult {
+    let client = client_of(&request);
+    let p = submit_data(&state, &visitor, &name).await?;
+    let again = |m: &str| {
+        account::submit(&account::SubmitPage {
+            error: Some(m.to_string()),
+            ..p.clone()
+        })
+    };
+    let upload = read_submission(&state, &visitor, request)
+        .await
+        .map_err(|e| e.with_page(again))?;
+    let caller = &visitor.caller;
+    match &p.bot {
+        Some((bot_id, _)) => {
+            super::super::bots::add_bot_version(&state, caller, *bot_id, upload)
+                .await
+                .map_err(|e| PageError::from(e).with_page(again))?;
+        }
+        None => {
+            let created = super::super::bots::register_bot(&state, caller, client, upload)
+                .await
+                .map_err(|e| PageError::from(e).with_page(again))?;
+            super::super::competitions::enter_bot(&state, caller, &name, created.bot_id)
+                .await
+                .map_err(|e| PageError::from(e).with_page(again))?;
+        }
+    }
+    Ok(see_other(&format!("/me#competition-{name}"), None))
+}
