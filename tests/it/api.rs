@@ -854,6 +854,8 @@ async fn the_openapi_document_lists_every_route() {
         ("/api/competitions/{name}/selection", vec!["put"]),
         ("/api/competitions/{name}/results", vec!["get"]),
         ("/api/competitions/{name}/results.csv", vec!["get"]),
+        ("/api/competitions/{name}/rejudges", vec!["get", "post"]),
+        ("/api/competitions/{name}/export", vec!["get"]),
         ("/api/runtimes", vec!["get"]),
         ("/healthz", vec!["get"]),
         ("/metrics", vec!["get"]),

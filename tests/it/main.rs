@@ -18,6 +18,7 @@ mod rankings;
 mod readme;
 mod referee;
 mod runner;
+mod sessions;
 mod support;
 mod upgrade;
 mod web;
