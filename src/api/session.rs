@@ -194,14 +194,16 @@ pub fn secure(state: &AppState, headers: &HeaderMap) -> bool {
             .is_some_and(|v| v.eq_ignore_ascii_case("https"))
 }
 
-/// Whether `headers` show a request sent by a page of another site: `Sec-Fetch-Site`
-/// other than `same-origin` or `none`, or an `Origin` whose host is not this request's
-/// `Host`. (Clients that send neither, like curl, are not browsers acting for someone.)
+/// Whether `headers` show a request sent by a page of another site. A browser's
+/// `Sec-Fetch-Site` (which no page can set) decides when it is there: anything but
+/// `same-origin` or `none` (typed or bookmarked) is another site. Without it, an
+/// `Origin` whose host is not this request's `Host` is (and `null`, which the pages'
+/// `Referrer-Policy: no-referrer` makes older browsers send even from this site, is
+/// refused too: the form token still guards the signed-in forms). Clients that send
+/// neither header, like curl, are not browsers acting for someone.
 pub fn cross_site(headers: &HeaderMap) -> bool {
-    if let Some(site) = headers.get("sec-fetch-site").and_then(|v| v.to_str().ok())
-        && !matches!(site, "same-origin" | "none")
-    {
-        return true;
+    if let Some(site) = headers.get("sec-fetch-site").and_then(|v| v.to_str().ok()) {
+        return !matches!(site, "same-origin" | "none");
     }
     let Some(origin) = headers.get(header::ORIGIN) else {
         return false;
@@ -265,6 +267,18 @@ mod tests {
         assert!(cross_site(&headers(&[
             ("host", "example.org"),
             ("origin", "null"),
+        ])));
+        // The pages' no-referrer policy makes Chromium send `Origin: null` from this
+        // very site; its Sec-Fetch-Site says where the form came from.
+        assert!(!cross_site(&headers(&[
+            ("host", "example.org"),
+            ("origin", "null"),
+            ("sec-fetch-site", "same-origin"),
+        ])));
+        assert!(cross_site(&headers(&[
+            ("host", "example.org"),
+            ("origin", "http://example.org"),
+            ("sec-fetch-site", "cross-site"),
         ])));
     }
 

@@ -20,5 +20,6 @@ mod referee;
 mod runner;
 mod sessions;
 mod support;
+mod take_part;
 mod upgrade;
 mod web;

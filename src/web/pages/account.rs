@@ -263,8 +263,8 @@ pub fn me(p: &MePage) -> String {
             @for b in &p.bots {
                 section.my-bot {
                     h3 { a href={ "/bots/" (b.bot_id) } { (b.name) } " " span.muted { "(bot " (b.bot_id) ")" } }
-                    @for v in &b.versions {
-                        details.version open[v.build_status != "ready"] {
+                    @for (i, v) in b.versions.iter().enumerate() {
+                        details.version open[i == 0 || v.build_status != "ready"] {
                             summary { "version " (v.version) " " (status(&v.build_status)) " " span.muted { (time(v.created_at)) " · " code { (v.command) } } }
                             @match &v.log {
                                 Some(log) => { pre.log.build-log { (log) } }
