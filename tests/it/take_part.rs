@@ -86,7 +86,6 @@ async fn cookie_header(b: &Browser) -> String {
 
 #[tokio::test]
 async fn a_student_takes_part_from_the_browser_alone() {
-    let _heavy = super::support::heavy();
     let Some(b) = Browser::start("a_student_takes_part_from_the_browser_alone").await else {
         return;
     };
@@ -244,7 +243,6 @@ async fn a_student_takes_part_from_the_browser_alone() {
 
 #[tokio::test]
 async fn an_organiser_runs_a_competition_from_the_browser() {
-    let _heavy = super::support::heavy();
     let Some(b) = Browser::start("an_organiser_runs_a_competition_from_the_browser").await else {
         return;
     };
