@@ -1042,3 +1042,208 @@ async fn twins_share_a_rank_and_print_equal_means_everywhere() {
         );
     }
 }
+
+#[tokio::test]
+async fn a_rejudge_plays_matches_again_keeps_the_earlier_records_and_counts_the_results_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--no-validation"]);
+    let (_, o) = server
+        .post("/api/organisers", json!({"name": "judge"}), Some(ADMIN))
+        .await;
+    let organiser = o["key"].as_str().unwrap().to_string();
+    let (_, other) = server
+        .post("/api/organisers", json!({"name": "stranger"}), Some(ADMIN))
+        .await;
+    let stranger = other["key"].as_str().unwrap().to_string();
+    let start = now_ms();
+    let spec = json!({
+        "name": "rejudge-cup", "title": "Rejudges",
+        "opens_at": at(start + 1500), "closes_at": at(start + 3_600_000),
+        "repeats": 1, "final_repeats": 1,
+        "mazes": {
+            "public": [maze("p1", 8101), maze("p2", 8102)],
+            "private": [maze("q1", 8103), maze("q2", 8104)],
+        },
+    });
+    let (s, c) = server
+        .post("/api/competitions", spec, Some(&organiser))
+        .await;
+    assert_eq!(s, 201, "{c}");
+    let mut versions = Vec::new();
+    for name in ["ann", "bob"] {
+        let (_, e) = server
+            .post("/api/entrants", json!({"name": name}), None)
+            .await;
+        let key = e["key"].as_str().unwrap().to_string();
+        let body = json!({"name": format!("{name}-bot"), "command": "python3 simple_bot.py", "files": simple_bot_files()});
+        let (s, b) = server.post("/api/bots", body, Some(&key)).await;
+        assert_eq!(s, 201, "{b}");
+        versions.push(b["version"]["bot_version_id"].as_i64().unwrap());
+        let (s, v) = server
+            .post(
+                "/api/competitions/rejudge-cup/entries",
+                json!({"bot_id": b["bot_id"]}),
+                Some(&key),
+            )
+            .await;
+        assert_eq!(s, 201, "{v}");
+    }
+    wait_for(
+        &server,
+        "/api/competitions/rejudge-cup/leaderboard",
+        None,
+        |v| v["standings"].as_array().is_some_and(|s| s.len() == 2),
+    )
+    .await;
+    // Only its organiser (or the admin) rejudges, and only what is in the competition.
+    let path = "/api/competitions/rejudge-cup/rejudges";
+    let ask = |mut body: Value| {
+        body["reason"] = json!("the worker's disk failed");
+        body
+    };
+    let (s, _) = server
+        .post(
+            path,
+            (ask(json!({"bot_version_id": versions[0]}))),
+            Some(&stranger),
+        )
+        .await;
+    assert_eq!(s, 403);
+    let (s, _) = server
+        .post(path, (ask(json!({"bot_version_id": versions[0]}))), None)
+        .await;
+    assert_eq!(s, 401);
+    let (s, e) = server.post(path, (ask(json!({}))), Some(&organiser)).await;
+    assert_eq!(s, 422, "{e}");
+    let (s, e) = server
+        .post(path, (ask(json!({"maze_id": 1}))), Some(&organiser))
+        .await;
+    assert_eq!(s, 422, "a maze of no competition: {e}");
+    let (s, e) = server
+        .post(
+            path,
+            json!({"bot_version_id": versions[0], "reason": ""}),
+            Some(&organiser),
+        )
+        .await;
+    assert_eq!(s, 422, "a reason is needed: {e}");
+    // Close, and wait for the results.
+    let (s, v, _) = server
+        .call(
+            Method::PATCH,
+            "/api/competitions/rejudge-cup",
+            Some(json!({"closes_at": at(now_ms())})),
+            Some(&organiser),
+        )
+        .await;
+    assert_eq!(s, 200, "{v}");
+    let view = wait_for(
+        &server,
+        "/api/competitions/rejudge-cup",
+        Some(&organiser),
+        |v| v["state"] == "final",
+    )
+    .await;
+    let (s, first) = server
+        .get("/api/competitions/rejudge-cup/results", None)
+        .await;
+    assert_eq!(s, 200, "{first}");
+    // A private maze's matches played again: the results are withdrawn until they are.
+    let private = crate::support::private_maze_ids(&view);
+    let (s, r) = server
+        .post(
+            path,
+            (ask(json!({"maze_id": private[0]}))),
+            Some(&organiser),
+        )
+        .await;
+    assert_eq!(s, 201, "{r}");
+    assert_eq!(r["matches"], 2, "two entrants, one repeat: {r}");
+    assert_eq!(
+        r["requested_by"],
+        format!("organiser:{}", o["organiser_id"])
+    );
+    let (_, now_view) = server
+        .get("/api/competitions/rejudge-cup", Some(&organiser))
+        .await;
+    assert_ne!(
+        now_view["state"], "final",
+        "the results wait for the rejudged matches"
+    );
+    wait_for(&server, "/api/competitions/rejudge-cup", None, |v| {
+        v["state"] == "final"
+    })
+    .await;
+    let (s, second) = server
+        .get("/api/competitions/rejudge-cup/results", None)
+        .await;
+    assert_eq!(s, 200, "{second}");
+    // The same deterministic bots on the same seeds: the same results, counted again.
+    for (a, b) in first["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(second["results"].as_array().unwrap())
+    {
+        assert_eq!(a["entrant"], b["entrant"]);
+        assert_eq!(a["rank"], b["rank"]);
+        assert_eq!(a["score_sum30"], b["score_sum30"], "{a} / {b}");
+    }
+    // Each rejudged match keeps its earlier outcome, and counts once.
+    let (_, matches) = server
+        .get(
+            &format!("/api/matches?maze_id={}&limit=50", private[0]),
+            Some(ADMIN),
+        )
+        .await;
+    let items = matches["items"].as_array().unwrap();
+    assert_eq!(items.len(), 2, "{matches}");
+    for m in items {
+        let (_, full) = server
+            .get(&format!("/api/matches/{}", m["match_id"]), Some(ADMIN))
+            .await;
+        let kept = full["superseded"].as_array().expect("its earlier outcome");
+        assert_eq!(kept.len(), 1, "{full}");
+        assert_eq!(kept[0]["rejudge_id"], r["rejudge_id"]);
+        assert_eq!(
+            kept[0]["score"], full["score"],
+            "the same bot, the same seed"
+        );
+    }
+    // The results written again equal a recount from the match records.
+    let out = crate::support::mazearena(&[
+        "competition",
+        "results",
+        "rejudge-cup",
+        "--database",
+        &server.database,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("every row equals a recount"));
+    let (_, list) = server.get(path, Some(&organiser)).await;
+    assert_eq!(list.as_array().unwrap().len(), 1, "{list}");
+    // The command line does the same on the server's database.
+    let out = crate::support::mazearena(&[
+        "competition",
+        "rejudge",
+        "rejudge-cup",
+        "--version-id",
+        &versions[1].to_string(),
+        "--reason",
+        "a referee fix",
+        "--database",
+        &server.database,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    // Its two public matches and its two of the final run.
+    assert!(text.contains("rejudge 2: 4 matches"), "{text}");
+}
