@@ -1104,19 +1104,19 @@ async fn a_rejudge_plays_matches_again_keeps_the_earlier_records_and_counts_the_
     let (s, _) = server
         .post(
             path,
-            (ask(json!({"bot_version_id": versions[0]}))),
+            ask(json!({"bot_version_id": versions[0]})),
             Some(&stranger),
         )
         .await;
     assert_eq!(s, 403);
     let (s, _) = server
-        .post(path, (ask(json!({"bot_version_id": versions[0]}))), None)
+        .post(path, ask(json!({"bot_version_id": versions[0]})), None)
         .await;
     assert_eq!(s, 401);
-    let (s, e) = server.post(path, (ask(json!({}))), Some(&organiser)).await;
+    let (s, e) = server.post(path, ask(json!({})), Some(&organiser)).await;
     assert_eq!(s, 422, "{e}");
     let (s, e) = server
-        .post(path, (ask(json!({"maze_id": 1}))), Some(&organiser))
+        .post(path, ask(json!({"maze_id": 1})), Some(&organiser))
         .await;
     assert_eq!(s, 422, "a maze of no competition: {e}");
     let (s, e) = server
@@ -1151,11 +1151,7 @@ async fn a_rejudge_plays_matches_again_keeps_the_earlier_records_and_counts_the_
     // A private maze's matches played again: the results are withdrawn until they are.
     let private = crate::support::private_maze_ids(&view);
     let (s, r) = server
-        .post(
-            path,
-            (ask(json!({"maze_id": private[0]}))),
-            Some(&organiser),
-        )
+        .post(path, ask(json!({"maze_id": private[0]})), Some(&organiser))
         .await;
     assert_eq!(s, 201, "{r}");
     assert_eq!(r["matches"], 2, "two entrants, one repeat: {r}");
