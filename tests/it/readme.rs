@@ -366,7 +366,7 @@ async fn the_readme_competition_example_runs_as_written() {
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
     // A second entrant takes part with the client, as the README's walkthrough says.
-    let walkthrough = self::blocks("Take part from the command line");
+    let walkthrough = self::blocks("Take part");
     assert_eq!(walkthrough.len(), 1, "{walkthrough:?}");
     let config = dir.path().join("client.toml");
     let out = sh(
@@ -690,7 +690,7 @@ fn every_readme_shell_example_is_run_by_a_test() {
         "Testing a bot locally",
         "Running the server",
         "Running a competition",
-        "Take part from the command line",
+        "Take part",
         "Closing a competition",
         "Scaling out: PostgreSQL, API servers and workers",
         "Tournaments without a server",
@@ -718,8 +718,8 @@ fn every_readme_shell_example_is_run_by_a_test() {
     // In reading order, a competition is made and entered, taken part in, then closed.
     let at = |h: &str| text.find(&format!("## {h}\n")).unwrap();
     assert!(
-        at("Running a competition") < at("Take part from the command line")
-            && at("Take part from the command line") < at("Closing a competition"),
+        at("Running a competition") < at("Take part")
+            && at("Take part") < at("Closing a competition"),
         "the README closes the competition before its entrants take part"
     );
 }

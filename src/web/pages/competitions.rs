@@ -143,7 +143,7 @@ pub fn competition(p: &CompetitionPage) -> String {
                         a.button href={ "/competitions/" (c.name) "/submit" } { "upload your bot" }
                         ". Upload your files or a .zip; for a " code { "robot.py" } " of the original task tick \"robot.py of the original task\" and upload only your own files. "
                         a href="/me" { "Your page" } " shows the build, the validation match, your practice matches with your stderr, your rank and your quotas." }
-                    li { strong { "From a terminal: " } code { "mazearena login URL --key KEY" } ", then " code { "mazearena submit " (c.name) " ./my-bot" } " (see the README's \"Take part from the command line\")." }
+                    li { strong { "From a terminal: " } code { "mazearena login URL --key KEY" } ", then " code { "mazearena submit ./my-bot --competition " (c.name) } " (see the README's \"Take part\")." }
                     li { strong { "With curl: " } code { "POST /api/entrants" } ", " code { "POST /api/bots" } " with your key, then " code { "POST /api/competitions/" (c.name) "/entries" } " (the " a href="/api/openapi.json" { "API document" } ")." }
                 }
             }
