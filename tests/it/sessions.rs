@@ -695,3 +695,130 @@ async fn form_errors_are_pages_with_the_apis_messages() {
     assert_eq!(web.get("/organise", Some(&session)).await.status, 403);
     assert_eq!(web.get("/admin", Some(&session)).await.status, 403);
 }
+
+#[tokio::test]
+async fn an_exported_competition_is_created_again_from_its_archive_through_the_organisers_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = TestServer::start(dir.path(), &["--no-validation"]);
+    let (_, o) = first
+        .post("/api/organisers", json!({"name": "t"}), Some(ADMIN))
+        .await;
+    let organiser = o["key"].as_str().unwrap().to_string();
+    let (_, other) = first
+        .post("/api/organisers", json!({"name": "u"}), Some(ADMIN))
+        .await;
+    let now = mazearena::storage::now_ms();
+    let maze = |n: u64| {
+        json!({"name": format!("m{n}"), "layout": mazearena::engine::mazefile::numeric::write(
+            &mazearena::engine::generator::generate(12, n).unwrap())})
+    };
+    let spec = json!({
+        "name": "moving-cup", "title": "Moving", "rules": "be kind",
+        "opens_at": mazearena::competition::Timestamp(now + 3_600_000).rfc3339(),
+        "closes_at": mazearena::competition::Timestamp(now + 7_200_000).rfc3339(),
+        "mazes": {"practice": [maze(9201)], "public": [maze(9202), maze(9203)], "private": [maze(9204)]},
+    });
+    let (s, c) = first
+        .post("/api/competitions", spec, Some(&organiser))
+        .await;
+    assert_eq!(s, 201, "{c}");
+    // The export holds private mazes: its organiser's (and the admin's) only.
+    let url = format!("{}/api/competitions/moving-cup/export", first.base);
+    let http = reqwest::Client::new();
+    let get = |token: Option<String>| {
+        let mut r = http.get(&url);
+        if let Some(t) = token {
+            r = r.bearer_auth(t);
+        }
+        r.send()
+    };
+    assert_eq!(get(None).await.unwrap().status(), 401);
+    assert_eq!(
+        get(Some(other["key"].as_str().unwrap().to_string()))
+            .await
+            .unwrap()
+            .status(),
+        403
+    );
+    let archive = get(Some(organiser.clone())).await.unwrap();
+    assert_eq!(archive.status(), 200);
+    assert_eq!(archive.headers()["content-type"], "application/gzip");
+    let archive = archive.bytes().await.unwrap().to_vec();
+
+    // Another server takes it back through the form, as an archive.
+    let dir2 = tempfile::tempdir().unwrap();
+    let second = TestServer::start(dir2.path(), &["--no-validation", "--secure-cookies"]);
+    let web = Web::new(&second);
+    let login = web.post("/login", None, &[("key", ADMIN)]).await;
+    assert!(
+        login.set_cookie().unwrap().contains("Secure"),
+        "--secure-cookies marks the cookie Secure"
+    );
+    let session = login.session().unwrap();
+    let token = web.get("/organise", Some(&session)).await.csrf();
+    let form = reqwest::multipart::Form::new().text("csrf", token).part(
+        "archive",
+        reqwest::multipart::Part::bytes(archive).file_name("moving-cup.tar.gz"),
+    );
+    let r = web
+        .http
+        .post(format!("{}/organise", second.base))
+        .header("cookie", format!("mazearena_session={session}"))
+        .multipart(form);
+    let created = Web::answer(r).await;
+    assert_eq!(created.status, 303, "{}", created.body);
+    assert_eq!(created.location(), "/competitions/moving-cup/manage");
+    let (_, a) = first
+        .get("/api/competitions/moving-cup", Some(&organiser))
+        .await;
+    let (_, b) = second
+        .get("/api/competitions/moving-cup", Some(ADMIN))
+        .await;
+    for field in [
+        "title",
+        "rules",
+        "opens_at",
+        "closes_at",
+        "repeats",
+        "limits",
+    ] {
+        assert_eq!(a[field], b[field], "{field}");
+    }
+    let hashes = |v: &serde_json::Value| {
+        let mut h: Vec<String> = v["mazes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| format!("{}:{}", m["set"], m["hash"]))
+            .collect();
+        h.sort();
+        h
+    };
+    assert_eq!(hashes(&a), hashes(&b), "the same mazes in the same sets");
+    // A competition file whose maze is missing: the page says which.
+    let token = web.get("/organise", Some(&session)).await.csrf();
+    let form = reqwest::multipart::Form::new()
+        .text("csrf", token)
+        .part(
+            "competition",
+            reqwest::multipart::Part::text(
+                "name = \"x-cup\"\ntitle = \"X\"\nopens_at = 2099-01-01T00:00:00Z\n\
+                 closes_at = 2099-02-01T00:00:00Z\n[mazes]\npublic = [\"mazes/a.txt\"]\nprivate = [\"mazes/b.txt\"]\n",
+            )
+            .file_name("competition.toml"),
+        );
+    let r = web
+        .http
+        .post(format!("{}/organise", second.base))
+        .header("cookie", format!("mazearena_session={session}"))
+        .multipart(form);
+    let missing = Web::answer(r).await;
+    assert_eq!(missing.status, 422, "{}", missing.body);
+    assert!(
+        missing
+            .body
+            .contains("the maze file mazes/a.txt was not uploaded"),
+        "{}",
+        missing.body
+    );
+}

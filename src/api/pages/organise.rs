@@ -170,12 +170,22 @@ async fn read_creation(
             std::fs::create_dir_all(&scratch)?;
             let tmp = tempfile::tempdir_in(&scratch)?;
             let dest = tmp.path().join("folder");
+            std::fs::create_dir(&dest)?;
             crate::botfiles::unpack_archive(
                 &bytes,
                 &dest,
                 &crate::botfiles::BundleLimits::default(),
             )
-            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()))?;
+            .map_err(|e| {
+                // The archive's own faults are told; the server's (paths) are not.
+                let message = if e.is_client_error() {
+                    e.to_string()
+                } else {
+                    tracing::error!(error = %e, "unpacking a competition archive");
+                    "the server could not unpack it".to_string()
+                };
+                std::io::Error::new(std::io::ErrorKind::InvalidData, message)
+            })?;
             Ok::<_, std::io::Error>(text_files(&dest))
         })
         .await
