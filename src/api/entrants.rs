@@ -285,10 +285,20 @@ async fn rotate_key(
     caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<NewKey>> {
+    Ok(axum::Json(rotate(&state, &caller, id).await?))
+}
+
+/// Replaces entrant `id`'s key for `caller` (that entrant or the admin): the API's and
+/// the "me" page's one way. The old key, its bots' owner tokens and every browser
+/// session opened with them stop working at once.
+///
+/// # Errors
+/// No such entrant; not its key.
+pub(crate) async fn rotate(state: &AppState, caller: &Caller, id: i64) -> ApiResult<NewKey> {
     if state.storage.get_entrant(id).await?.is_none() {
         return Err(ApiError::NotFound(format!("no entrant {id}")));
     }
-    let allowed = match &caller {
+    let allowed = match caller {
         Caller::Admin => true,
         Caller::Anonymous | Caller::Organiser(_) => false,
         Caller::Token(hash) => state
@@ -310,7 +320,7 @@ async fn rotate_key(
         .storage
         .rotate_entrant_key(id, &hash_token(&key))
         .await?;
-    Ok(axum::Json(NewKey { key }))
+    Ok(NewKey { key })
 }
 
 /// The registration mode: `open`, `closed` or `invite`.

@@ -269,10 +269,28 @@ async fn sessions_are_hashed_ended_by_logout_and_rotation_and_never_taken_from_t
     assert_eq!(web.get("/me", Some(&owner)).await.status, 303);
     // The new key logs in.
     let new_key = rotated["key"].as_str().unwrap();
-    assert_eq!(
-        web.get("/me", Some(&web.login(new_key).await)).await.status,
-        200
-    );
+    let mine = web.login(new_key).await;
+    assert_eq!(web.get("/me", Some(&mine)).await.status, 200);
+    // From the browser: "replace my key" shows the new key once, keeps the visitor in
+    // with a new session, and ends the old key's.
+    let other = web.login(new_key).await;
+    let token = web.get("/me", Some(&mine)).await.csrf();
+    let page = web.post("/me/key", Some(&mine), &[("csrf", &token)]).await;
+    assert_eq!(page.status, 200, "{}", page.body);
+    assert_eq!(page.headers["cache-control"], "no-store");
+    let newest = {
+        let at = page.body.find("id=\"new-key\">").unwrap() + "id=\"new-key\">".len();
+        page.body[at..at + 64].to_string()
+    };
+    assert_ne!(newest, new_key);
+    let kept = page.session().expect("a new session");
+    assert_eq!(web.get("/me", Some(&kept)).await.status, 200);
+    assert_eq!(web.get("/me", Some(&mine)).await.status, 303);
+    assert_eq!(web.get("/me", Some(&other)).await.status, 303);
+    let (s, _) = server.get("/api/me", Some(new_key)).await;
+    assert_eq!(s, 401, "the replaced key is dead");
+    let (s, _) = server.get("/api/me", Some(&newest)).await;
+    assert_eq!(s, 200);
 }
 
 #[tokio::test]
@@ -691,6 +709,15 @@ async fn form_errors_are_pages_with_the_apis_messages() {
     let missing = web.get("/competitions/nope/submit", Some(&session)).await;
     assert_eq!(missing.status, 404);
     assert!(missing.body.contains("<h1>"));
+    // The API's page lists its routes, as a page.
+    let api = web.get("/api", None).await;
+    assert_eq!(api.status, 200);
+    assert!(
+        api.body.contains("/api/competitions/{name}/rejudges"),
+        "{}",
+        api.body
+    );
+    assert!(api.body.contains("href=\"/api/openapi.json\""));
     // An entrant on the organiser's and the admin's pages: refused, as pages.
     assert_eq!(web.get("/organise", Some(&session)).await.status, 403);
     assert_eq!(web.get("/admin", Some(&session)).await.status, 403);

@@ -533,3 +533,28 @@ pub(super) async fn submit(
     }
     Ok(see_other(&format!("/me#competition-{name}"), None))
 }
+
+pub(super) async fn rotate_key(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    request: Request,
+) -> PageResult {
+    let secure = session::secure(&state, request.headers());
+    let form: TokenForm = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    let e = super::super::competitions::entrant(&state, &visitor.caller).await?;
+    let new = super::super::entrants::rotate(&state, &visitor.caller, e.entrant_id).await?;
+    // This session ended with the old key: the visitor goes on with a new one.
+    let cookie = session::open(&state, &hash_token(&new.key), secure).await?;
+    let mut response = Html(account::replaced(&e.name, &new.key)).into_response();
+    if let Ok(v) = axum::http::HeaderValue::from_str(&cookie.to_string()) {
+        response
+            .headers_mut()
+            .append(axum::http::header::SET_COOKIE, v);
+    }
+    response.headers_mut().insert(
+        axum::http::header::CACHE_CONTROL,
+        axum::http::HeaderValue::from_static("no-store"),
+    );
+    Ok(response)
+}

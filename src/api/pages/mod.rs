@@ -1,7 +1,9 @@
 //! The server's web pages (HTML): thin handlers that fetch what a page shows, apply the
-//! hidden-maze rules for an anonymous visitor (pages never use a token: a hidden maze's
-//! layout, replay and failure text never appear in a page), and call `web::pages`.
-//! Bad ids and query strings get the API's JSON errors.
+//! hidden-maze rules (a hidden maze's layout, replay and failure text never appear in a
+//! page), and call `web::pages`. Pages never take a token: a visitor is anonymous, or
+//! signed in with a browser session ([`super::session`]), which acts as the key that
+//! opened it. Bad ids and query strings of the reading pages get the API's JSON errors;
+//! the forms ([`account`], [`organise`]) answer every error as a page.
 
 use std::collections::BTreeMap;
 
@@ -58,6 +60,7 @@ pub(super) fn router() -> Router<AppState> {
         )
         .route("/me", get(account::me_page))
         .route("/me/practice", post(account::practice))
+        .route("/me/key", post(account::rotate_key))
         .route(
             "/competitions/{name}/submit",
             get(account::submit_page).post(account::submit).layer(

@@ -89,10 +89,19 @@ pub fn register(p: &RegisterPage, error: Option<&str>, name: &str, members: &str
 
 /// The page after a registration: the key, shown once.
 pub fn registered(name: &str, key: &str) -> String {
+    key_page("Registered", &format!("Welcome, {name}"), name, key)
+}
+
+/// The page after a key was replaced: the new key, shown once.
+pub fn replaced(name: &str, key: &str) -> String {
+    key_page("New key", "Your new key", name, key)
+}
+
+fn key_page(title: &str, heading: &str, name: &str, key: &str) -> String {
     page(
-        "Registered",
+        title,
         html! {
-            h1 { "Welcome, " (name) }
+            h1 { (heading) }
             p.warning { strong { "Save your key now: it is shown only this once." } " It signs you in on any browser and acts for your bots from the command line (" code { "mazearena login" } ") or the API (" code { "Authorization: Bearer KEY" } "). If you lose it, the admin can give you a new one." }
             pre.key id="new-key" { (key) }
             p { a.button download={ "mazearena-key-" (name) ".txt" } href={ "data:text/plain;charset=utf-8," (key) } { "Download the key as a file" } }
@@ -194,6 +203,16 @@ pub fn me(p: &MePage) -> String {
         form.inline method="post" action="/logout" {
             (csrf_field(&p.csrf))
             button type="submit" { "Log out" }
+        }
+        @if p.kind == "entrant" {
+            details.rotate {
+                summary { "Replace my key" }
+                p.muted { "If your key was seen by someone else: a new key replaces it at once. The old key, your bots' owner tokens and every session opened with them stop working (log in again on your other browsers and with " code { "mazearena login" } ")." }
+                form.inline.rotate method="post" action="/me/key" {
+                    (csrf_field(&p.csrf))
+                    button.danger type="submit" { "Replace my key now" }
+                }
+            }
         }
         @if let Some(n) = &p.notice { p.notice role="status" { (n) } }
         @if p.live { p.muted.live { "Something is building or playing: this page reloads every 5 seconds." } }
