@@ -14,7 +14,9 @@
 //!   the database), admitting mazes, tokens, the workers' cache of bots' files.
 //! - [`worker`]: match workers that claim queued matches with a lease and record them;
 //!   [`builder`]: builds uploaded bot versions that have a build command.
-//! - [`api`]: the HTTP/JSON API (axum), with its OpenAPI document.
+//! - [`api`]: the HTTP/JSON API (axum), with its OpenAPI document, and the pages'
+//!   handlers: reading pages, and the forms of browser sessions (taking part,
+//!   organising, administration), each calling the same operation as its API route.
 //! - [`botfiles`]: safe unpacking of uploaded bots; [`manifest`]: `bot.toml` files.
 //! - [`metrics`]: Prometheus metrics.
 //! - [`web`]: HTML: the replay viewer and the server's pages (pure rendering).
