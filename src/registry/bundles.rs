@@ -45,11 +45,24 @@ fn write_upload(files: &BotFiles, dest: &Path, limits: &BundleLimits) -> Result<
         BotFiles::OriginalTask(inner) => {
             let summary = write_upload(inner, dest, limits)?;
             if !dest.join(ROBOT_FILE).is_file() {
-                return Err(RegistryError::Invalid(format!(
-                    "an original-task robot needs a file named {ROBOT_FILE} at the top of its \
-                     files (the upload has {} files, none of them {ROBOT_FILE})",
-                    summary.files
-                )));
+                // An archive of the folder rather than of its files: say so.
+                let nested = fs::read_dir(dest)
+                    .into_iter()
+                    .flatten()
+                    .flatten()
+                    .find(|e| e.path().join(ROBOT_FILE).is_file())
+                    .map(|e| e.file_name().to_string_lossy().into_owned());
+                return Err(RegistryError::Invalid(match nested {
+                    Some(folder) => format!(
+                        "{ROBOT_FILE} is inside the folder {folder:?} of the archive: archive \
+                         the files themselves (robot.py at the top), not their folder"
+                    ),
+                    None => format!(
+                        "an original-task robot needs a file named {ROBOT_FILE} at the top of \
+                         its files (the upload has {} files, none of them {ROBOT_FILE})",
+                        summary.files
+                    ),
+                }));
             }
             // The uploaded entry of that name (a file or a link) is replaced, never
             // written through: the new file is created where nothing is.
@@ -216,6 +229,66 @@ pub(super) async fn blocking<T: Send + 'static>(
 
 #[cfg(test)]
 mod tests {
+    #[tokio::test]
+    async fn an_original_task_upload_gets_the_adapter_and_needs_its_robot_at_the_top() {
+        let (db, _d) = crate::storage::test_support::fresh().await;
+        let scratch = tempfile::tempdir().unwrap();
+        let files = |pairs: &[(&str, &str)]| {
+            BotFiles::Map(
+                pairs
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+                    .collect(),
+            )
+        };
+        let ok = store_upload(
+            &db,
+            BotFiles::OriginalTask(Box::new(files(&[
+                ("robot.py", "class Robot: pass\n"),
+                ("udacity_adapter.py", "print('not the adapter')\n"),
+            ]))),
+            scratch.path(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(
+            ok.files, 2,
+            "the robot and the adapter, which replaced the upload's"
+        );
+        let same = store_upload(
+            &db,
+            files(&[
+                ("robot.py", "class Robot: pass\n"),
+                (ADAPTER_FILE, ORIGINAL_TASK_ADAPTER),
+            ]),
+            scratch.path(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(
+            ok.sha256, same.sha256,
+            "the server's adapter, byte for byte"
+        );
+        let nested = store_upload(
+            &db,
+            BotFiles::OriginalTask(Box::new(files(&[("mine/robot.py", "x = 1\n")]))),
+            scratch.path(),
+        )
+        .await
+        .unwrap_err()
+        .to_string();
+        assert!(nested.contains("inside the folder \"mine\""), "{nested}");
+        let none = store_upload(
+            &db,
+            BotFiles::OriginalTask(Box::new(files(&[("bot.py", "x = 1\n")]))),
+            scratch.path(),
+        )
+        .await
+        .unwrap_err()
+        .to_string();
+        assert!(none.contains("needs a file named robot.py"), "{none}");
+    }
+
     use super::*;
     use crate::storage::test_support;
 

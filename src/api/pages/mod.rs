@@ -3,7 +3,7 @@
 //! page), and call `web::pages`. Pages never take a token: a visitor is anonymous, or
 //! signed in with a browser session ([`super::session`]), which acts as the key that
 //! opened it. Bad ids and query strings of the reading pages get the API's JSON errors;
-//! the forms ([`account`], [`organise`]) answer every error as a page.
+//! the forms (`account`, `organise`) answer every error as a page.
 
 use std::collections::BTreeMap;
 
