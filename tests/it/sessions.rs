@@ -543,6 +543,11 @@ async fn markup_in_every_field_a_user_sets_stays_text_and_pages_cannot_be_framed
         "the stderr, escaped in the viewer's data"
     );
     assert!(replay.body.contains("\"stderr_hidden\":false"));
+    // The bot's page shows its owner the build log, and nobody else.
+    let mine = web.get(&format!("/bots/{bot_id}"), Some(&owner)).await;
+    assert!(mine.body.contains("owner-build-log"), "{}", mine.body);
+    let theirs = web.get(&format!("/bots/{bot_id}"), None).await;
+    assert!(!theirs.body.contains("owner-build-log"));
     // Anyone else sees the replay without the owner's stderr.
     let public = web.get(&format!("/matches/{m}"), None).await;
     assert!(public.body.contains("\"stderr_hidden\":true"));

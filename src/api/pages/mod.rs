@@ -164,6 +164,7 @@ fn public_reason(row: &MatchRow) -> Option<String> {
 
 async fn bot_page(
     State(state): State<AppState>,
+    visitor: super::session::Visitor,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<Html<String>> {
     let bot = state
@@ -182,11 +183,13 @@ async fn bot_page(
         },
     )
     .await?;
+    let owner = visitor.signed_in() && visitor.caller.owns(&state, id).await?;
     Ok(Html(web::bot(&web::BotPage {
         bot,
         versions,
         recent,
         total_matches,
+        owner,
     })))
 }
 

@@ -23,6 +23,8 @@ pub struct BotPage {
     pub recent: Vec<MatchLine>,
     /// How many matches it has in all.
     pub total_matches: MatchCount,
+    /// True when the visitor's session owns the bot: its build logs are in the page.
+    pub owner: bool,
 }
 
 /// A bot's page: versions, recent matches; the owner can paste their token to see the
@@ -65,14 +67,25 @@ pub fn bot(p: &BotPage) -> String {
         h2 { "Recent matches" }
         (match_table(&p.recent))
         p { a href={ "/matches?bot_id=" (b.bot_id) } { "All " (count_text(p.total_matches)) } }
-        h2 { "Owner's logs" }
-        p.muted { "The bot's owner can see each failed match's stderr and the build logs: paste the owner token (it stays in this page and is sent only to this server's API)." }
-        form.inline #owner-form data-bot=(b.bot_id) {
-            input #owner-token type="password" placeholder="owner token" autocomplete="off";
-            button type="submit" { "Show logs" }
+        @if p.owner {
+            h2 { "Build and validation logs" }
+            p.muted { "You own this bot: its logs are shown to you. Open a match to see its stderr." }
+            @for v in &p.versions {
+                @if let Some(log) = &v.build_log {
+                    h3 { "version " (v.version) " " (status(&v.build_status)) }
+                    pre.log.owner-build-log { (log) }
+                }
+            }
+        } @else {
+            h2 { "Owner's logs" }
+            p.muted { a href="/login" { "Log in" } " to see your bot's logs here, or paste the owner token (it stays in this page and is sent only to this server's API)." }
+            form.inline #owner-form data-bot=(b.bot_id) {
+                input #owner-token type="password" placeholder="owner token" autocomplete="off";
+                button type="submit" { "Show logs" }
+            }
+            div #owner-logs {}
+            script { (PreEscaped(OWNER_LOGS_JS)) }
         }
-        div #owner-logs {}
-        script { (PreEscaped(OWNER_LOGS_JS)) }
     };
     page(&b.name, body)
 }
