@@ -10,6 +10,7 @@ use serde_json::value::RawValue;
 
 use crate::engine::{Action, Sense};
 
+pub mod mms;
 mod plain;
 
 /// The protocol version this server speaks.
