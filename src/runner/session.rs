@@ -141,6 +141,19 @@ fn redacted(redact: &[(String, String)], line: String) -> String {
     line
 }
 
+/// One step's answer being waited for: since when and under which limits.
+struct Ask {
+    since: Instant,
+    step: u32,
+    limit: Option<Duration>,
+    allowed_us: Option<u64>,
+    /// The CPU counter when it was asked.
+    mark: u64,
+    /// The wall-clock backstop (moved out with the CPU time used).
+    deadline: Option<Instant>,
+    factor: u32,
+}
+
 /// How a wait for an answer ended.
 enum Waited {
     /// The reply pipe holds what is next (or could not be read).
@@ -237,6 +250,86 @@ impl Session {
     /// ([`NEAR_WAIT`]), then through the runtime; either way every stderr byte the bot
     /// wrote before its answer is read before the answer.
     pub async fn exchange(&mut self, sense: &Sense) -> Verdict {
+        let mut ask = self.ask(sense).await;
+        let line = ServerMessage::sense(sense).to_line();
+        if let Err(e) = self.send_sense(line.as_bytes(), ask.deadline).await {
+            let (status, failure) = write_failure(e, sense.step);
+            return self.limit_or(Verdict::Fault(status, failure), sense.step);
+        }
+        if let Err(verdict) = self.wait_line(&mut ask).await {
+            return verdict;
+        }
+        let (answer_us, cpu_us) = match self.answered(&ask) {
+            Ok(times) => times,
+            Err(verdict) => return verdict,
+        };
+        let line = self.replies.line();
+        match crate::protocol::decode_answer(line) {
+            Ok(answer) => Verdict::Answer {
+                action: answer.action,
+                answer_us,
+                cpu_us,
+                debug: answer.debug,
+            },
+            Err(e) => protocol_fault(e, line, sense.step),
+        }
+    }
+
+    /// Plays one step with an mms mouse (docs/PROTOCOL-mms.md): the translator `mouse`
+    /// answers the mouse's commands (written back within the step's limit) until one of
+    /// them is the step's action. The whole conversation is the step's answer time.
+    pub async fn exchange_mms(
+        &mut self,
+        sense: &Sense,
+        mouse: &mut crate::protocol::mms::Mouse,
+    ) -> Verdict {
+        use crate::protocol::mms::Next;
+        let mut ask = self.ask(sense).await;
+        let mms_fault = |e: crate::protocol::mms::MmsError| {
+            Verdict::Fault(MatchStatus::ProtocolError, failure(e.0, sense.step))
+        };
+        let mut next = match mouse.begin(sense) {
+            Ok(n) => n,
+            Err(e) => return mms_fault(e),
+        };
+        loop {
+            next = match next {
+                Next::Act(action) => {
+                    return match self.answered(&ask) {
+                        Ok((answer_us, cpu_us)) => Verdict::Answer {
+                            action,
+                            answer_us,
+                            cpu_us,
+                            debug: None,
+                        },
+                        Err(verdict) => verdict,
+                    };
+                }
+                Next::Write(mut text) => {
+                    text.push('\n');
+                    if let Err(e) = self.send_sense(text.as_bytes(), ask.deadline).await {
+                        let (status, failure) = write_failure(e, sense.step);
+                        return self.limit_or(Verdict::Fault(status, failure), sense.step);
+                    }
+                    Next::Read
+                }
+                Next::Read => {
+                    if let Err(verdict) = self.wait_line(&mut ask).await {
+                        return verdict;
+                    }
+                    let text = String::from_utf8_lossy(self.replies.line());
+                    match mouse.line(text.trim_end_matches('\r')) {
+                        Ok(n) => n,
+                        Err(e) => return mms_fault(e),
+                    }
+                }
+            };
+        }
+    }
+
+    /// Starts timing the answer to `sense`: its limit, the CPU time it may use, and the
+    /// wall-clock backstop.
+    async fn ask(&mut self, sense: &Sense) -> Ask {
         if self.turned_at.elapsed() >= TURN_EVERY {
             tokio::task::yield_now().await;
             self.turned_at = Instant::now();
@@ -265,15 +358,25 @@ impl Session {
         } else {
             1
         };
-        let mut deadline = limit.map(|l| since + l * factor);
-        let line = ServerMessage::sense(sense).to_line();
-        if let Err(e) = self.send_sense(line.as_bytes(), deadline).await {
-            let (status, failure) = write_failure(e, sense.step);
-            return self.limit_or(Verdict::Fault(status, failure), sense.step);
+        Ask {
+            since,
+            step: sense.step,
+            limit,
+            allowed_us,
+            mark,
+            deadline: limit.map(|l| since + l * factor),
+            factor,
         }
+    }
+
+    /// Waits for the bot's next line under `ask`'s limits: `Ok` when the replies hold
+    /// it, else the verdict (a timeout, a crash, a line too long, a limit).
+    async fn wait_line(&mut self, ask: &mut Ask) -> Result<(), Verdict> {
+        let (since, limit, mark, factor, step) =
+            (ask.since, ask.limit, ask.mark, ask.factor, ask.step);
         let waited = loop {
-            let waited = match self.wait_near(deadline) {
-                Waited::Later => self.wait_through_runtime(deadline).await,
+            let waited = match self.wait_near(ask.deadline) {
+                Waited::Later => self.wait_through_runtime(ask.deadline).await,
                 waited => waited,
             };
             // The wall-clock backstop moves out with the CPU time the bot uses: a bot
@@ -282,58 +385,53 @@ impl Session {
                 let used = self.cpu_used(mark);
                 let backstop = since + (l + Duration::from_micros(used)) * factor;
                 if Instant::now() < backstop {
-                    deadline = Some(backstop);
+                    ask.deadline = Some(backstop);
                     continue;
                 }
             }
             break waited;
         };
+        if let Waited::Got(Ok(framing::Next::Line)) = waited {
+            return Ok(());
+        }
         self.cpu_cap = None;
-        match waited {
-            Waited::Got(Ok(framing::Next::Line)) => {
-                self.answer(since, sense.step, limit, allowed_us)
-            }
+        Err(match waited {
+            Waited::Got(Ok(framing::Next::Line)) => unreachable!("returned above"),
             Waited::Got(Ok(framing::Next::End)) => {
-                let reason = format!("{CLOSED_STDOUT} before answering step {}", sense.step);
-                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
+                let reason = format!("{CLOSED_STDOUT} before answering step {step}");
+                self.fault_or_limit(MatchStatus::Crashed, reason, step)
             }
-            Waited::Got(Ok(framing::Next::TooLong)) => protocol_fault(
-                ProtocolError::LineTooLong,
-                self.replies.partial(),
-                sense.step,
-            ),
+            Waited::Got(Ok(framing::Next::TooLong)) => {
+                protocol_fault(ProtocolError::LineTooLong, self.replies.partial(), step)
+            }
             Waited::Got(Err(e)) => {
                 let reason = format!("reading the bot's stdout failed: {e}");
-                self.fault_or_limit(MatchStatus::Crashed, reason, sense.step)
+                self.fault_or_limit(MatchStatus::Crashed, reason, step)
             }
             Waited::TimedOut | Waited::Later => {
-                let what = if sense.step == 1 { "startup" } else { "move" };
+                let what = if step == 1 { "startup" } else { "move" };
                 let ms = limit.map_or(0, |l| l.as_millis());
                 let mut reason = if self.cpu_counted {
                     let used = self.cpu_used(mark) / 1000;
                     format!(
-                        "no answer to step {} within {} ms of wall-clock time, in which the bot \
+                        "no answer to step {step} within {} ms of wall-clock time, in which the bot \
                          used {used} ms of CPU time: it was waiting, not thinking (an answer is \
                          given up on after {WALL_BACKSTOP_FACTOR} x (the {what} limit of {ms} ms \
                          + the CPU time used))",
-                        sense.step,
                         since.elapsed().as_millis()
                     )
                 } else {
-                    format!(
-                        "no answer to step {} within the {what} limit of {ms} ms",
-                        sense.step
-                    )
+                    format!("no answer to step {step} within the {what} limit of {ms} ms")
                 };
-                if sense.step == 1 {
+                if step == 1 {
                     reason.push_str(STARTUP_HINT);
                 }
-                let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, sense.step);
+                let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, step);
                 with_time_limit(verdict, "wall_clock", since.elapsed().as_millis() as u64)
             }
-            Waited::CpuOver(used, allowed) => self.cpu_fault(sense.step, used, allowed, limit),
-            Waited::Limit(kind) => self.limit_fault(kind, sense.step),
-        }
+            Waited::CpuOver(used, allowed) => self.cpu_fault(step, used, allowed, limit),
+            Waited::Limit(kind) => self.limit_fault(kind, step),
+        })
     }
 
     /// Waits for the answer through the runtime (a bot that thinks), under `deadline`,
@@ -471,15 +569,11 @@ impl Session {
         with_time_limit(verdict, "cpu_time", allowed / 1000)
     }
 
-    /// The verdict on the line the replies hold, answered `since`, whose step's limit is
-    /// `limit` and which may have used `allowed_us` of CPU time (the limit and the bank).
-    fn answer(
-        &mut self,
-        since: Instant,
-        step: u32,
-        limit: Option<Duration>,
-        allowed_us: Option<u64>,
-    ) -> Verdict {
+    /// The step `ask` is answered now: its wall-clock and CPU time, its CPU time counted
+    /// against its limit and the bank.
+    fn answered(&mut self, ask: &Ask) -> Result<(u64, Option<u64>), Verdict> {
+        self.cpu_cap = None;
+        let (since, step, limit, allowed_us) = (ask.since, ask.step, ask.limit, ask.allowed_us);
         let answer_us = since.elapsed().as_micros() as u64;
         let cpu_now = self.process.cpu_us();
         let cpu_us = match (self.cpu_mark, cpu_now) {
@@ -495,7 +589,7 @@ impl Session {
         // noticed: the same rule whenever the counter is read.
         if let (Some(used), Some(allowed), true) = (cpu_us, allowed_us, self.cpu_counted) {
             if used > allowed {
-                return self.cpu_fault(step, used, allowed, limit);
+                return Err(self.cpu_fault(step, used, allowed, limit));
             }
             if step > 1 {
                 let limit_us = limit.map_or(0, |l| l.as_micros() as u64);
@@ -504,16 +598,7 @@ impl Session {
                     .saturating_sub(used.saturating_sub(limit_us));
             }
         }
-        let line = self.replies.line();
-        match crate::protocol::decode_answer(line) {
-            Ok(answer) => Verdict::Answer {
-                action: answer.action,
-                answer_us,
-                cpu_us,
-                debug: answer.debug,
-            },
-            Err(e) => protocol_fault(e, line, step),
-        }
+        Ok((answer_us, cpu_us))
     }
 
     /// The fault `status` at `step` because of `reason`, unless a limit hit explains it
