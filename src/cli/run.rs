@@ -65,6 +65,10 @@ pub struct RunArgs {
     /// Print every exchange (sensors in, answer out) and the bot's stderr as it comes.
     #[arg(long, short = 'v', conflicts_with = "json")]
     verbose: bool,
+    /// The protocol the bot speaks: `v1` (JSON lines) or `mms` (a mouse written for the
+    /// mms simulator, translated by the referee: docs/PROTOCOL-mms.md).
+    #[arg(long, default_value = "v1", value_parser = crate::runner::BotProtocol::parse)]
+    protocol: crate::runner::BotProtocol,
     /// An environment variable for the bot, KEY=VALUE (repeatable); the bot gets no
     /// other variable of yours.
     #[arg(long = "bot-env", value_name = "KEY=VALUE", value_parser = parse_bot_env)]
@@ -120,6 +124,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         env: args.bot_env.clone(),
         echo_stderr: args.verbose,
         runtime: None,
+        protocol: args.protocol,
     };
     // One core for the referee and the bot (runner::affinity): the one we are on.
     crate::runner::affinity::pin_to_this_core();

@@ -82,6 +82,52 @@ pub struct BotSpec {
     pub echo_stderr: bool,
     /// The runtime to put first on the bot's `PATH`, by name (one of the sandbox's).
     pub runtime: Option<String>,
+    /// The protocol it speaks.
+    pub protocol: BotProtocol,
+}
+
+/// The protocol a bot speaks: protocol v1 (line-delimited JSON, docs/PROTOCOL.md), or
+/// the text commands of a mouse written for the mms simulator, translated by the referee
+/// (docs/PROTOCOL-mms.md).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BotProtocol {
+    /// Protocol v1.
+    #[default]
+    V1,
+    /// An mms mouse.
+    Mms,
+}
+
+impl BotProtocol {
+    /// Its name in `bot.toml`, the API and the command line (`v1` or `mms`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            BotProtocol::V1 => "v1",
+            BotProtocol::Mms => "mms",
+        }
+    }
+
+    /// The protocol named `name`.
+    ///
+    /// # Errors
+    /// An unknown name, said with the known ones.
+    pub fn parse(name: &str) -> Result<BotProtocol, String> {
+        match name {
+            "v1" => Ok(BotProtocol::V1),
+            "mms" => Ok(BotProtocol::Mms),
+            other => Err(format!(
+                "unknown protocol {other:?}: `v1` (JSON lines) or `mms` (a mouse of the mms simulator)"
+            )),
+        }
+    }
+}
+
+impl std::str::FromStr for BotProtocol {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        BotProtocol::parse(s)
+    }
 }
 
 impl BotSpec {
@@ -194,7 +240,15 @@ pub async fn run_match(
         seed,
         move_timeout_ms: limits.move_timeout.map_or(0, |d| d.as_millis() as u64),
     };
-    let mut failure = session.greet(&start).await.err();
+    // An mms mouse gets no start message: it asks what it wants to know.
+    let mut mouse = (bot.protocol == BotProtocol::Mms).then(|| {
+        record.bot_protocol = Some(BotProtocol::Mms.as_str().to_string());
+        crate::protocol::mms::Mouse::new(maze.dim())
+    });
+    let mut failure = match mouse {
+        Some(_) => None,
+        None => session.greet(&start).await.err(),
+    };
     let mut debug_budget = trace::DebugBudget::default();
     while failure.is_none() {
         let Some(sense) = game.begin_step() else {
@@ -203,7 +257,17 @@ pub async fn run_match(
         if !record.trace.is_empty() {
             stderr_to_last_step(&mut record, session.take_stderr_lines());
         }
-        match session.exchange(&sense).await {
+        let verdict = match mouse.as_mut() {
+            Some(m) => {
+                let v = session.exchange_mms(&sense, m).await;
+                // The display commands are not drawn yet: kept within their budget and
+                // let go.
+                let _ = m.take_display();
+                v
+            }
+            None => session.exchange(&sense).await,
+        };
+        match verdict {
             Verdict::Answer {
                 action,
                 answer_us,
@@ -246,7 +310,20 @@ pub async fn run_match(
         run0_steps: record.run0_steps,
         run1_steps: record.run1_steps,
     };
-    let mut ended = session.finish(&end).await;
+    if let Some(m) = &mouse {
+        let (kept, count) = m.warnings();
+        if count > 0 {
+            let mut message = format!("{count} unknown mms commands were not answered");
+            if let Some(first) = kept.first() {
+                message.push_str(&format!(", the first: {first}"));
+            }
+            record.notices.push(crate::runner::outcome::Notice {
+                step: record.total_steps,
+                message,
+            });
+        }
+    }
+    let mut ended = session.finish(mouse.is_none().then_some(&end)).await;
     stderr_to_last_step(&mut record, std::mem::take(&mut ended.late_stderr));
     if let Some((_, mut f)) = failure {
         (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);
@@ -328,6 +405,7 @@ fn new_record(maze: &Maze, seed: u64, limits: &Limits, sandbox: &Sandbox) -> Mat
     MatchRecord {
         engine_version: ENGINE_VERSION.to_string(),
         protocol: PROTOCOL_VERSION,
+        bot_protocol: None,
         maze_hash: maze.hash(),
         maze_dim: maze.dim(),
         seed,

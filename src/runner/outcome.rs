@@ -262,6 +262,10 @@ pub struct MatchRecord {
     pub engine_version: String,
     /// The bot protocol version.
     pub protocol: u32,
+    /// `mms` when the bot was a mouse of the mms simulator, spoken to through the
+    /// referee's translation (docs/PROTOCOL-mms.md); absent for protocol v1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bot_protocol: Option<String>,
     /// SHA-256 of the maze's canonical numeric text.
     pub maze_hash: String,
     /// The maze side.
@@ -327,6 +331,7 @@ impl MatchRecord {
         MatchRecord {
             engine_version: self.engine_version.clone(),
             protocol: self.protocol,
+            bot_protocol: self.bot_protocol.clone(),
             maze_hash: self.maze_hash.clone(),
             maze_dim: self.maze_dim,
             seed: self.seed,

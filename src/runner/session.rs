@@ -627,13 +627,15 @@ impl Session {
         self.process.limit_hit()
     }
 
-    /// Sends the end message, closes stdin, gives the bot [`EXIT_GRACE`] to exit, then
+    /// Sends the end message (v1 bots), closes stdin, gives the bot [`EXIT_GRACE`] to exit, then
     /// kills every process it has left and reaps it.
-    pub async fn finish(mut self, end: &ServerMessage) -> Ended {
+    pub async fn finish(mut self, end: Option<&ServerMessage>) -> Ended {
         let grace = tokio::time::Instant::now() + EXIT_GRACE;
         // Without a cgroup the CPU time is read from live processes: read it now too.
         let cpu_before = self.process.cpu_us();
-        let _ = send(&mut self.stdin, end, Some(grace)).await;
+        if let Some(end) = end {
+            let _ = send(&mut self.stdin, end, Some(grace)).await;
+        }
         drop(self.stdin);
         // Its stderr is read meanwhile: a bot blocked on a full pipe could not exit.
         let exited = self.stderr.drain_while(self.process.wait());

@@ -258,6 +258,8 @@ fn complete(stored: Stored, summary: MatchSummary, maze: &Maze) -> Result<MatchR
             .engine_version
             .ok_or_else(|| missing("engine version"))?,
         protocol: stored.protocol,
+        // Records of this encoding come from before mms mice.
+        bot_protocol: None,
         maze_hash: maze.hash(),
         maze_dim: maze.dim(),
         seed: stored.seed,
