@@ -257,11 +257,11 @@ impl Session {
             return self.limit_or(Verdict::Fault(status, failure), sense.step);
         }
         if let Err(verdict) = self.wait_line(&mut ask).await {
-            return verdict;
+            return *verdict;
         }
         let (answer_us, cpu_us) = match self.answered(&ask) {
             Ok(times) => times,
-            Err(verdict) => return verdict,
+            Err(verdict) => return *verdict,
         };
         let line = self.replies.line();
         match crate::protocol::decode_answer(line) {
@@ -302,7 +302,7 @@ impl Session {
                             cpu_us,
                             debug: None,
                         },
-                        Err(verdict) => verdict,
+                        Err(verdict) => *verdict,
                     };
                 }
                 Next::Write(mut text) => {
@@ -315,7 +315,7 @@ impl Session {
                 }
                 Next::Read => {
                     if let Err(verdict) = self.wait_line(&mut ask).await {
-                        return verdict;
+                        return *verdict;
                     }
                     let text = String::from_utf8_lossy(self.replies.line());
                     match mouse.line(text.trim_end_matches('\r')) {
@@ -371,7 +371,7 @@ impl Session {
 
     /// Waits for the bot's next line under `ask`'s limits: `Ok` when the replies hold
     /// it, else the verdict (a timeout, a crash, a line too long, a limit).
-    async fn wait_line(&mut self, ask: &mut Ask) -> Result<(), Verdict> {
+    async fn wait_line(&mut self, ask: &mut Ask) -> Result<(), Box<Verdict>> {
         let (since, limit, mark, factor, step) =
             (ask.since, ask.limit, ask.mark, ask.factor, ask.step);
         let waited = loop {
@@ -395,7 +395,7 @@ impl Session {
             return Ok(());
         }
         self.cpu_cap = None;
-        Err(match waited {
+        Err(Box::new(match waited {
             Waited::Got(Ok(framing::Next::Line)) => unreachable!("returned above"),
             Waited::Got(Ok(framing::Next::End)) => {
                 let reason = format!("{CLOSED_STDOUT} before answering step {step}");
@@ -431,7 +431,7 @@ impl Session {
             }
             Waited::CpuOver(used, allowed) => self.cpu_fault(step, used, allowed, limit),
             Waited::Limit(kind) => self.limit_fault(kind, step),
-        })
+        }))
     }
 
     /// Waits for the answer through the runtime (a bot that thinks), under `deadline`,
@@ -571,7 +571,7 @@ impl Session {
 
     /// The step `ask` is answered now: its wall-clock and CPU time, its CPU time counted
     /// against its limit and the bank.
-    fn answered(&mut self, ask: &Ask) -> Result<(u64, Option<u64>), Verdict> {
+    fn answered(&mut self, ask: &Ask) -> Result<(u64, Option<u64>), Box<Verdict>> {
         self.cpu_cap = None;
         let (since, step, limit, allowed_us) = (ask.since, ask.step, ask.limit, ask.allowed_us);
         let answer_us = since.elapsed().as_micros() as u64;
@@ -589,7 +589,7 @@ impl Session {
         // noticed: the same rule whenever the counter is read.
         if let (Some(used), Some(allowed), true) = (cpu_us, allowed_us, self.cpu_counted) {
             if used > allowed {
-                return Err(self.cpu_fault(step, used, allowed, limit));
+                return Err(Box::new(self.cpu_fault(step, used, allowed, limit)));
             }
             if step > 1 {
                 let limit_us = limit.map_or(0, |l| l.as_micros() as u64);

@@ -377,6 +377,7 @@ mod tests {
         }
         MatchRecord {
             engine_version: "t".into(),
+            bot_protocol: None,
             protocol: 1,
             maze_hash: maze.hash(),
             maze_dim: maze.dim(),
