@@ -13,6 +13,7 @@ mod faults;
 mod hostile;
 mod load;
 mod mazefiles;
+mod mms;
 mod pages;
 mod rankings;
 mod readme;
