@@ -275,7 +275,7 @@ impl Builder {
             env: version.env_pairs(),
             echo_stderr: false,
             runtime: version.runtime.clone(),
-            protocol: crate::runner::BotProtocol::V1,
+            protocol: crate::runner::BotProtocol::of_stored(version.protocol.as_deref()),
         };
         let limits = Limits {
             max_steps: VALIDATION_STEPS,

@@ -49,6 +49,10 @@ pub struct BotManifest {
     /// `GET /api/runtimes` lists, e.g. a venv with numpy); `mazearena submit` sends it.
     #[serde(default)]
     pub runtime: Option<String>,
+    /// The protocol the bot speaks: `v1` (the default, JSON lines) or `mms` (a mouse
+    /// written for the mms simulator, played unchanged: docs/PROTOCOL-mms.md).
+    #[serde(default)]
+    pub protocol: crate::runner::BotProtocol,
     /// Files `mazearena submit` uploads although it leaves them out otherwise (a name
     /// starting with `.`, or one a `.gitignore` names): relative paths of regular files
     /// inside the folder, checked when packing ([`crate::client::pack::pack`]).

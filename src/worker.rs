@@ -426,6 +426,7 @@ impl Worker {
         let mut bot = BotSpec::new(job.command.clone(), dir);
         bot.env = crate::storage::bots::env_pairs(&job.env);
         bot.runtime.clone_from(&job.runtime);
+        bot.protocol = crate::runner::BotProtocol::of_stored(job.protocol.as_deref());
         // A competition's matches play under its own limits.
         let job_limits = job
             .limits

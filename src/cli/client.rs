@@ -333,6 +333,9 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
             if let Some(b) = &bot.build {
                 f = f.text("build", b.clone());
             }
+            if bot.protocol != crate::runner::BotProtocol::V1 {
+                f = f.text("protocol", bot.protocol.as_str());
+            }
             if let Some(r) = &bot.runtime {
                 f = f.text("runtime", r.clone());
             }

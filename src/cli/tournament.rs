@@ -61,6 +61,10 @@ pub struct TournamentArgs {
     /// `env` of the same name).
     #[arg(long = "bot-env", value_name = "KEY=VALUE", value_parser = super::run::parse_bot_env)]
     bot_env: Vec<(String, String)>,
+    /// The protocol every bot speaks, over its manifest's `protocol`: `v1` or `mms` (mice
+    /// written for the mms simulator: docs/PROTOCOL-mms.md).
+    #[arg(long, value_parser = crate::runner::BotProtocol::parse)]
+    protocol: Option<crate::runner::BotProtocol>,
     #[command(flatten)]
     sandbox: super::sandbox::SandboxArgs,
 }
@@ -80,6 +84,9 @@ pub fn run(args: TournamentArgs) -> anyhow::Result<()> {
     }
     for b in &mut bots {
         b.env.extend(args.bot_env.iter().cloned());
+        if let Some(p) = args.protocol {
+            b.protocol = p;
+        }
         let env: Vec<(String, String)> = b.env.clone().into_iter().collect();
         runner::botenv::check(&env).with_context(|| format!("bot {}: env", b.name))?;
     }

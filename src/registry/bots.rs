@@ -36,6 +36,8 @@ pub struct Submission {
     pub files: BotFiles,
     /// The server's runtime to put first on the bot's `PATH`, by name.
     pub runtime: Option<String>,
+    /// The protocol it speaks.
+    pub protocol: crate::runner::BotProtocol,
 }
 
 /// A registered bot: its first version and its owner token (shown this once).
@@ -194,6 +196,7 @@ pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64>
         env: &env,
         bundle_sha256: None,
         runtime: bot.runtime.as_deref(),
+        protocol: bot.protocol.stored(),
     };
     if let Some(existing) = storage.get_bot_by_name(&bot.name).await? {
         let latest = storage
@@ -215,6 +218,7 @@ pub async fn register_local(storage: &Storage, bot: &BotManifest) -> Result<i64>
             && latest.command == bot.command
             && latest.env_pairs() == env
             && latest.runtime == bot.runtime
+            && latest.protocol.as_deref() == bot.protocol.stored()
             && latest.bundle_sha256.is_none();
         if same {
             return Ok(latest.bot_version_id);
@@ -246,6 +250,7 @@ fn stored_version<'a>(submission: &'a Submission, summary: &'a BundleSummary) ->
         env: &submission.env,
         bundle_sha256: Some(&summary.sha256),
         runtime: submission.runtime.as_deref(),
+        protocol: submission.protocol.stored(),
     }
 }
 
@@ -265,6 +270,7 @@ mod tests {
             build: None,
             env: vec![],
             runtime: None,
+            protocol: Default::default(),
             files: BotFiles::Map(
                 files
                     .iter()
@@ -312,6 +318,7 @@ mod tests {
             claimed: BTreeMap::new(),
             env: BTreeMap::new(),
             runtime: None,
+            protocol: Default::default(),
             include: Vec::new(),
             dir: folder.path().to_path_buf(),
         };

@@ -124,6 +124,7 @@ mod tests {
                     env: &[],
                     bundle_sha256: None,
                     runtime: None,
+                    protocol: None,
                 },
             )
             .await
@@ -168,6 +169,7 @@ mod tests {
                         env: &[],
                         bundle_sha256: None,
                         runtime: None,
+                        protocol: None,
                     },
                 )
                 .await

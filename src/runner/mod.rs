@@ -123,6 +123,20 @@ impl BotProtocol {
     }
 }
 
+impl BotProtocol {
+    /// The protocol a stored version names (`None`: protocol v1; an unknown name,
+    /// written by a later release, also v1).
+    pub fn of_stored(name: Option<&str>) -> BotProtocol {
+        name.and_then(|n| BotProtocol::parse(n).ok())
+            .unwrap_or_default()
+    }
+
+    /// What a stored version keeps: `None` for protocol v1.
+    pub fn stored(self) -> Option<&'static str> {
+        (self != BotProtocol::V1).then(|| self.as_str())
+    }
+}
+
 impl std::str::FromStr for BotProtocol {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

@@ -77,6 +77,9 @@ pub struct BotVersionRow {
     pub build_attempts: i64,
     /// The runtime it wants first on its `PATH`, by name (`GET /api/runtimes`).
     pub runtime: Option<String>,
+    /// `mms` for a mouse of the mms simulator; `None` for protocol v1.
+    #[sqlx(default)]
+    pub protocol: Option<String>,
 }
 
 impl BotVersionRow {
@@ -143,6 +146,8 @@ pub struct NewVersion<'a> {
     pub env: &'a [(String, String)],
     /// The runtime it wants first on its `PATH`, by name.
     pub runtime: Option<&'a str>,
+    /// `mms` for a mouse of the mms simulator; `None` for protocol v1.
+    pub protocol: Option<&'a str>,
 }
 
 const BOT_WITH_LATEST: &str =
@@ -479,9 +484,9 @@ async fn insert_version(
     };
     Ok(sqlx::query_as(
         "insert into bot_version (bot_id, version, command, dir, files_sha256, file_count, created_at,
-             build_command, build_status, env, bundle_sha256, runtime)
+             build_command, build_status, env, bundle_sha256, runtime, protocol)
          values ($1, (select coalesce(max(version), 0) + 1 from bot_version where bot_id = $2), $3, $4, $5, $6, $7,
-             $8, $9, $10, $11, $12)
+             $8, $9, $10, $11, $12, $13)
          returning *",
     )
     .bind(bot_id)
@@ -496,6 +501,7 @@ async fn insert_version(
     .bind(env_json(new.env))
     .bind(new.bundle_sha256)
     .bind(new.runtime)
+    .bind(new.protocol)
     .fetch_one(tx)
     .await?)
 }
@@ -515,6 +521,7 @@ mod tests {
             env: &[],
             bundle_sha256: None,
             runtime: None,
+            protocol: None,
         }
     }
 

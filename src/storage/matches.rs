@@ -265,6 +265,9 @@ pub struct ClaimedMatch {
     pub env: String,
     /// The runtime the version wants first on its `PATH`, by name.
     pub runtime: Option<String>,
+    /// `mms` for a mouse of the mms simulator; `None` for protocol v1.
+    #[sqlx(default)]
+    pub protocol: Option<String>,
     /// The tournament's match limits (JSON, [`crate::competition::Limits`]), if it has
     /// its own.
     pub limits: Option<String>,
@@ -580,7 +583,7 @@ impl Storage {
         let Some(id) = id else { return Ok(None) };
         Ok(sqlx::query_as(
             "select m.match_id, m.seed, v.command, v.dir, v.bundle_sha256, v.built_sha256,
-                 z.layout, m.tournament_id, v.env, v.runtime,
+                 z.layout, m.tournament_id, v.env, v.runtime, v.protocol,
                  (select t.limits from tournament t where t.tournament_id = m.tournament_id) as limits
              from match m join bot_version v on v.bot_version_id = m.bot_version_id
              join maze z on z.maze_id = m.maze_id where m.match_id = $1",

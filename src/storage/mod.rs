@@ -503,6 +503,7 @@ pub(crate) mod test_support {
             env: &[],
             bundle_sha256: None,
             runtime: None,
+            protocol: None,
         }
     }
 
@@ -517,6 +518,7 @@ pub(crate) mod test_support {
             env: &[],
             bundle_sha256: None,
             runtime: None,
+            protocol: None,
         }
     }
 

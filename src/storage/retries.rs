@@ -265,6 +265,7 @@ mod tests {
                         env: &[],
                         bundle_sha256: None,
                         runtime: None,
+                        protocol: None,
                     },
                 )
                 .await
@@ -288,6 +289,7 @@ mod tests {
                 env: &[],
                 bundle_sha256: None,
                 runtime: None,
+                protocol: None,
             };
             db.add_bot_version(bot_id, &v2).await.unwrap();
             let bot = db.get_bot(bot_id).await.unwrap().unwrap();

@@ -149,3 +149,62 @@ fn the_kits_flood_fill_mouse_finishes_the_classic_mazes_alike_in_the_sandbox_and
         assert!(inside["run1_steps"].as_i64() < inside["run0_steps"].as_i64());
     }
 }
+
+#[tokio::test]
+async fn an_mms_mouse_uploaded_with_protocol_mms_is_validated_and_plays_on_a_server() {
+    use super::support::{TestServer, queue, wait_built, wait_match};
+    use serde_json::json;
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let mouse =
+        std::fs::read_to_string(super::support::root().join("bots/mms/python/floodfill.py"))
+            .unwrap();
+    // The protocol is checked like every field.
+    let (s, e) = server
+        .post(
+            "/api/bots",
+            json!({"name": "m0", "command": "python3 floodfill.py", "protocol": "mmx",
+                   "files": {"floodfill.py": mouse}}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 422, "{e}");
+    assert!(
+        e["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("unknown protocol")
+    );
+    let (s, bot) = server
+        .post(
+            "/api/bots",
+            json!({"name": "mouse", "command": "python3 floodfill.py", "protocol": "mms",
+                   "files": {"floodfill.py": mouse}}),
+            None,
+        )
+        .await;
+    assert_eq!(s, 201, "{bot}");
+    assert_eq!(bot["version"]["protocol"], "mms");
+    let id = bot["bot_id"].as_i64().unwrap();
+    let token = bot["owner_token"].as_str().unwrap().to_string();
+    let built = wait_built(&server, id).await;
+    assert_eq!(
+        built["build_status"], "ready",
+        "the validation match played it: {built}"
+    );
+    // Classic maze 1, added as a public maze.
+    let layout = std::fs::read_to_string(shared_maze("classic/test_maze_01.txt")).unwrap();
+    let (s, maze) = server
+        .post(
+            "/api/mazes",
+            json!({"name": "classic-1", "layout": layout}),
+            Some(super::support::ADMIN),
+        )
+        .await;
+    assert_eq!(s, 201, "{maze}");
+    let classic = maze["maze_id"].as_i64().unwrap();
+    let m = queue(&server, id, classic, 1, &token).await;
+    let done = wait_match(&server, m).await;
+    assert_eq!(done["status"], "finished", "{done}");
+    assert_eq!(done["score"], 25.0, "the same as `run` gives: {done}");
+}

@@ -103,6 +103,7 @@ async fn a_data_folder_of_an_earlier_release_moves_into_the_database() {
                 env: &[],
                 bundle_sha256: None,
                 runtime: None,
+                protocol: None,
             },
         )
         .await

@@ -50,6 +50,11 @@ pub struct BotUpload {
     /// set to `true` or `on`.)
     #[serde(default)]
     pub original_task: bool,
+    /// The protocol the bot speaks: `v1` (the default: JSON lines, docs/PROTOCOL.md) or
+    /// `mms` (a mouse written for the mms simulator, played unchanged through the
+    /// referee's translation: docs/PROTOCOL-mms.md). (Form: `protocol`.)
+    #[serde(default)]
+    pub protocol: Option<String>,
     /// Small bots: file name -> content.
     #[serde(default)]
     pub files: Option<BTreeMap<String, String>>,
@@ -101,6 +106,8 @@ pub struct VersionView {
     pub env_names: Vec<String>,
     /// The runtime it asked to have first on its `PATH` (`GET /api/runtimes`).
     pub runtime: Option<String>,
+    /// The protocol it speaks: `v1` or `mms`.
+    pub protocol: String,
 }
 
 /// Lines of a build log shown in a version's view.
@@ -120,6 +127,9 @@ impl From<BotVersionRow> for VersionView {
             build_status: v.build_status,
             built_at: v.built_at,
             build_log_tail: None,
+            protocol: crate::runner::BotProtocol::of_stored(v.protocol.as_deref())
+                .as_str()
+                .to_string(),
             runtime: v.runtime,
         }
     }

@@ -25,6 +25,7 @@ pub(crate) struct Upload {
     pub archive: Option<Vec<u8>>,
     pub runtime: Option<String>,
     pub original_task: bool,
+    pub protocol: Option<String>,
 }
 
 /// Whether a form's checkbox value is set.
@@ -56,6 +57,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         let (mut name, mut command, mut archive, mut build) = (None, None, None, None);
         let mut runtime = None;
         let mut original_task = false;
+        let mut protocol = None;
         let mut env = Vec::new();
         while let Some(field) = form.next_field().await? {
             match field.name().unwrap_or("") {
@@ -64,6 +66,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "build" => build = Some(field.text().await?),
                 "runtime" => runtime = Some(field.text().await?),
                 "original_task" => original_task = checked(&field.text().await?),
+                "protocol" => protocol = Some(field.text().await?),
                 "env" => {
                     let text = field.text().await?;
                     env.push(botenv::parse_assignment(&text).map_err(env_error)?);
@@ -71,7 +74,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "archive" => archive = Some(field.bytes().await?.to_vec()),
                 other => {
                     return Err(ApiError::BadRequest(format!(
-                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, archive"
+                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, protocol, archive"
                     )));
                 }
             }
@@ -84,6 +87,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
             files: None,
             runtime,
             original_task,
+            protocol,
             archive: Some(archive.ok_or_else(|| {
                 ApiError::Unprocessable("the form needs an `archive` file field".into())
             })?),
@@ -109,6 +113,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         archive,
         runtime: body.runtime,
         original_task: body.original_task,
+        protocol: body.protocol,
     })
 }
 
@@ -134,6 +139,18 @@ impl Upload {
             (None, Some(bytes)) => BotFiles::Archive(bytes),
         };
         let runtime = self.runtime.filter(|r| !r.trim().is_empty());
+        let protocol = match self.protocol.as_deref().map(str::trim) {
+            None | Some("") => crate::runner::BotProtocol::V1,
+            Some(name) => {
+                crate::runner::BotProtocol::parse(name).map_err(ApiError::Unprocessable)?
+            }
+        };
+        if self.original_task && protocol != crate::runner::BotProtocol::V1 {
+            return Err(ApiError::Unprocessable(
+                "an original-task robot.py speaks through its adapter (protocol v1), not `mms`"
+                    .into(),
+            ));
+        }
         let mut command = self.command.trim().to_string();
         let files = if self.original_task {
             if command.is_empty() {
@@ -158,6 +175,7 @@ impl Upload {
                 env: self.env,
                 files,
                 runtime,
+                protocol,
             },
         ))
     }

@@ -444,6 +444,7 @@ async fn read_submission(
             "command" => upload.command = field.text().await.map_err(ApiError::from)?,
             "build" => upload.build = Some(field.text().await.map_err(ApiError::from)?),
             "runtime" => upload.runtime = Some(field.text().await.map_err(ApiError::from)?),
+            "protocol" => upload.protocol = Some(field.text().await.map_err(ApiError::from)?),
             "original_task" => {
                 upload.original_task = checked(&field.text().await.map_err(ApiError::from)?)
             }

@@ -361,6 +361,10 @@ pub fn submit(p: &SubmitPage) -> String {
                     label.check { input type="checkbox" name="original_task" value="true"; " A " code { "robot.py" } " of the original task (class Robot with next_move): the server adds the adapter, so upload only your own files" }
                     label { "Command (leave empty for a robot.py of the original task) " input type="text" name="command" placeholder="python3 bot.py"; }
                     label { "Build command (optional, run once without network) " input type="text" name="build" placeholder="make"; }
+                    label { "Protocol " select name="protocol" {
+                        option value="v1" { "v1: JSON lines (the kits, an original-task robot.py)" }
+                        option value="mms" { "mms: a mouse written for the mms simulator, unchanged" }
+                    } }
                     label { "Runtime " select name="runtime" {
                         option value="" { "the system's (python3, gcc, node, java, go...)" }
                         @for (name, what) in &p.runtimes { option value=(name) { (name) " — " (what) } }
