@@ -14,9 +14,38 @@ use crate::engine::{Action, Sense};
 /// The most unknown-command warnings a match keeps (their count goes on).
 pub const MAX_WARNINGS: usize = 20;
 
-/// The most bytes of display commands (`setColor`, `setText`, ...) one step keeps for the
-/// replay's drawing; later ones of that step are counted, not kept.
-pub const MAX_DISPLAY_STEP_BYTES: usize = 16 * 1024;
+/// The longest cell text kept for the drawing (mms shows about ten characters).
+pub const MAX_CELL_TEXT_CHARS: usize = 10;
+
+/// mms's colour letters and the colours the replay draws them with.
+const COLORS: [(char, &str); 15] = [
+    ('k', "#000000"),
+    ('b', "#0000ff"),
+    ('a', "#808080"),
+    ('c', "#00ffff"),
+    ('g', "#00ff00"),
+    ('o', "#ffa500"),
+    ('r', "#ff0000"),
+    ('w', "#ffffff"),
+    ('y', "#ffff00"),
+    ('B', "#00008b"),
+    ('C', "#008b8b"),
+    ('A', "#a9a9a9"),
+    ('G', "#006400"),
+    ('R', "#8b0000"),
+    ('Y', "#9b870c"),
+];
+
+/// What the mouse has drawn (mms's display): kept as state, so a flood of commands costs
+/// nothing but the state's size, which the maze bounds.
+#[derive(Debug, Clone, Default)]
+struct Display {
+    colors: std::collections::BTreeMap<(i32, i32), &'static str>,
+    texts: std::collections::BTreeMap<(i32, i32), String>,
+    walls: std::collections::BTreeSet<(i32, i32, Dir)>,
+    /// Which of the three changed since the last step's drawing.
+    changed: [bool; 3],
+}
 
 /// What the runner does next.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -96,9 +125,7 @@ pub struct Mouse {
     stats: Stats,
     warnings: Vec<String>,
     unknown_count: u64,
-    display: Vec<String>,
-    display_bytes: usize,
-    display_dropped: u64,
+    display: Display,
 }
 
 fn step_of(d: Dir) -> (i32, i32) {
@@ -130,9 +157,7 @@ impl Mouse {
             stats: Stats::default(),
             warnings: Vec::new(),
             unknown_count: 0,
-            display: Vec::new(),
-            display_bytes: 0,
-            display_dropped: 0,
+            display: Display::default(),
         };
         // The outer wall is known.
         for i in 0..dim {
@@ -300,7 +325,9 @@ impl Mouse {
             },
             "setWall" | "clearWall" | "setColor" | "clearColor" | "clearAllColor" | "setText"
             | "clearText" | "clearAllText" => {
-                self.keep_display(line);
+                if !self.draw(command, args) {
+                    return Ok(self.unknown(line));
+                }
                 Ok(Next::Read)
             }
             _ => Ok(self.unknown(line)),
@@ -321,22 +348,117 @@ impl Mouse {
         Next::Read
     }
 
-    fn keep_display(&mut self, line: &str) {
-        if self.display_bytes + line.len() > MAX_DISPLAY_STEP_BYTES {
-            self.display_dropped += 1;
-            return;
+    /// Applies a display command to the drawing; false when its arguments are not
+    /// ones mms takes (a cell outside the maze, an unknown colour or side).
+    fn draw(&mut self, command: &str, args: &[&str]) -> bool {
+        let dim = self.dim;
+        let cell = |args: &[&str]| -> Option<(i32, i32)> {
+            let x: i32 = args.first()?.parse().ok()?;
+            let y: i32 = args.get(1)?.parse().ok()?;
+            (x >= 0 && y >= 0 && x < dim && y < dim).then_some((x, y))
+        };
+        let d = &mut self.display;
+        match (command, args.len()) {
+            ("setColor", 3) => {
+                let (Some(c), Some(color)) = (cell(args), args[2].chars().next()) else {
+                    return false;
+                };
+                let Some(hex) = COLORS.iter().find(|(k, _)| *k == color).map(|(_, h)| *h) else {
+                    return false;
+                };
+                if args[2].chars().count() != 1 {
+                    return false;
+                }
+                d.colors.insert(c, hex);
+                d.changed[0] = true;
+            }
+            ("clearColor", 2) => {
+                let Some(c) = cell(args) else { return false };
+                d.changed[0] |= d.colors.remove(&c).is_some();
+            }
+            ("clearAllColor", 0) => {
+                d.changed[0] |= !d.colors.is_empty();
+                d.colors.clear();
+            }
+            ("setText", n) if n >= 2 => {
+                let Some(c) = cell(args) else { return false };
+                let text: String = args[2..]
+                    .join(" ")
+                    .chars()
+                    .take(MAX_CELL_TEXT_CHARS)
+                    .collect();
+                d.texts.insert(c, text);
+                d.changed[1] = true;
+            }
+            ("clearText", 2) => {
+                let Some(c) = cell(args) else { return false };
+                d.changed[1] |= d.texts.remove(&c).is_some();
+            }
+            ("clearAllText", 0) => {
+                d.changed[1] |= !d.texts.is_empty();
+                d.texts.clear();
+            }
+            ("setWall" | "clearWall", 3) => {
+                let Some((x, y)) = cell(args) else {
+                    return false;
+                };
+                let side = match args[2] {
+                    "n" => 0,
+                    "e" => 1,
+                    "s" => 2,
+                    "w" => 3,
+                    _ => return false,
+                };
+                let changed = if command == "setWall" {
+                    d.walls.insert((x, y, side))
+                } else {
+                    d.walls.remove(&(x, y, side))
+                };
+                d.changed[2] |= changed;
+            }
+            _ => return false,
         }
-        self.display_bytes += line.len();
-        self.display.push(line.to_string());
+        true
     }
 
-    /// The display commands of the step so far (and how many were dropped), emptied.
-    pub fn take_display(&mut self) -> (Vec<String>, u64) {
-        self.display_bytes = 0;
-        (
-            std::mem::take(&mut self.display),
-            std::mem::take(&mut self.display_dropped),
-        )
+    /// The drawing's fields that changed since the last call, as the replay's debug
+    /// object (docs/PROTOCOL.md, "Debug drawing": `colors`, `cells`, `walls`; each field
+    /// whole, as the viewer keeps the latest of each); `None` when nothing changed.
+    pub fn take_drawing(&mut self) -> Option<String> {
+        let d = &mut self.display;
+        if !d.changed.iter().any(|c| *c) {
+            return None;
+        }
+        let mut object = serde_json::Map::new();
+        if d.changed[0] {
+            let colors: Vec<serde_json::Value> = d
+                .colors
+                .iter()
+                .map(|((x, y), hex)| serde_json::json!([x, y, hex]))
+                .collect();
+            object.insert("colors".into(), colors.into());
+        }
+        if d.changed[1] {
+            let cells: Vec<serde_json::Value> = d
+                .texts
+                .iter()
+                .map(|((x, y), t)| serde_json::json!([x, y, t]))
+                .collect();
+            object.insert("cells".into(), cells.into());
+        }
+        if d.changed[2] {
+            let walls: Vec<serde_json::Value> = d
+                .walls
+                .iter()
+                .map(|(x, y, side)| {
+                    let name = ["up", "right", "down", "left"][*side as usize];
+                    serde_json::json!([x, y, name])
+                })
+                .collect();
+            object.insert("walls".into(), walls.into());
+        }
+        d.changed = [false; 3];
+        Some(serde_json::Value::Object(object).to_string())
     }
 
     /// The warnings kept, and how many unknown commands there were in all.
@@ -578,7 +700,28 @@ mod tests {
         ] {
             assert_eq!(m.line(line).unwrap(), Next::Read, "{line}");
         }
-        assert_eq!(m.take_display().0.len(), 8);
+        let drawing: serde_json::Value = serde_json::from_str(&m.take_drawing().unwrap()).unwrap();
+        // Each was undone by the next: the cleared state is drawn.
+        assert_eq!(
+            drawing,
+            serde_json::json!({"colors": [], "cells": [], "walls": []})
+        );
+        assert_eq!(m.take_drawing(), None, "nothing changed since");
+        m.line("setColor 1 2 r").unwrap();
+        m.line("setText 3 4 a long text here").unwrap();
+        m.line("setWall 0 0 e").unwrap();
+        let drawing: serde_json::Value = serde_json::from_str(&m.take_drawing().unwrap()).unwrap();
+        assert_eq!(
+            drawing,
+            serde_json::json!({"colors": [[1, 2, "#ff0000"]], "cells": [[3, 4, "a long tex"]],
+                               "walls": [[0, 0, "right"]]})
+        );
+        // Arguments mms does not take: no answer, and a warning.
+        for line in ["setColor 99 0 r", "setColor 0 0 q", "setWall 0 0 up"] {
+            assert_eq!(m.line(line).unwrap(), Next::Read, "{line}");
+        }
+        assert_eq!(m.warnings().1, 3);
+        assert_eq!(m.take_drawing(), None);
         for line in [
             "dance",
             "turnLeft 1",
@@ -589,8 +732,8 @@ mod tests {
             assert_eq!(m.line(line).unwrap(), Next::Read, "{line}");
         }
         let (kept, count) = m.warnings();
-        assert_eq!(count, 5);
-        assert!(kept[0].contains("\"dance\""), "{kept:?}");
+        assert_eq!(count, 3 + 5, "the three bad display lines, and these five");
+        assert!(kept[3].contains("\"dance\""), "{kept:?}");
         assert_eq!(m.line("getStat total-turns").unwrap(), write("0"));
         assert_eq!(m.line("getStat best-run-distance").unwrap(), write("-1"));
     }
@@ -600,16 +743,18 @@ mod tests {
         let mut m = Mouse::new(16);
         m.begin(&sense(0, 1, [0, 1, 0])).unwrap();
         for i in 0..100_000 {
-            assert_eq!(
-                m.line(&format!("setColor {} {} R", i % 16, i / 16 % 16))
-                    .unwrap(),
-                Next::Read
-            );
+            let line = format!("setColor {} {} r", i % 16, i / 16 % 16);
+            assert_eq!(m.line(&line).unwrap(), Next::Read);
+            m.line(&format!("setText {} {} {i}", i % 16, i / 16 % 16))
+                .unwrap();
         }
-        let (kept, dropped) = m.take_display();
-        let bytes: usize = kept.iter().map(String::len).sum();
-        assert!(bytes <= MAX_DISPLAY_STEP_BYTES);
-        assert_eq!(kept.len() as u64 + dropped, 100_000);
+        // The state of a 16x16 maze, whatever the flood: well within a step's 16 KiB.
+        let drawing = m.take_drawing().unwrap();
+        assert!(
+            drawing.len() < crate::protocol::MAX_DEBUG_STEP_BYTES,
+            "{}",
+            drawing.len()
+        );
     }
 
     #[test]

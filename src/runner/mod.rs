@@ -272,13 +272,24 @@ pub async fn run_match(
             stderr_to_last_step(&mut record, session.take_stderr_lines());
         }
         let verdict = match mouse.as_mut() {
-            Some(m) => {
-                let v = session.exchange_mms(&sense, m).await;
-                // The display commands are not drawn yet: kept within their budget and
-                // let go.
-                let _ = m.take_display();
-                v
-            }
+            Some(m) => match session.exchange_mms(&sense, m).await {
+                // What the mouse drew (setColor, setText, setWall) up to its action is
+                // the step's debug drawing, within the same budget as v1's.
+                Verdict::Answer {
+                    action,
+                    answer_us,
+                    cpu_us,
+                    ..
+                } => Verdict::Answer {
+                    action,
+                    answer_us,
+                    cpu_us,
+                    debug: m
+                        .take_drawing()
+                        .and_then(|json| serde_json::value::RawValue::from_string(json).ok()),
+                },
+                fault => fault,
+            },
             None => session.exchange(&sense).await,
         };
         match verdict {

@@ -147,6 +147,12 @@ fn the_kits_flood_fill_mouse_finishes_the_classic_mazes_alike_in_the_sandbox_and
         }
         // It raced: run 1 is shorter than run 0.
         assert!(inside["run1_steps"].as_i64() < inside["run0_steps"].as_i64());
+        // Its setColor commands are the replay's drawing: step 1 paints the start.
+        assert_eq!(
+            inside["trace"][0]["debug"]["colors"][0],
+            serde_json::json!([0, 0, "#006400"]),
+            "maze {n}"
+        );
     }
 }
 
