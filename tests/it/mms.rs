@@ -214,3 +214,59 @@ async fn an_mms_mouse_uploaded_with_protocol_mms_is_validated_and_plays_on_a_ser
     assert_eq!(done["status"], "finished", "{done}");
     assert_eq!(done["score"], 25.0, "the same as `run` gives: {done}");
 }
+
+#[test]
+fn the_c_kits_mouse_calls_ack_reset_at_the_centre_and_finishes_the_classic_mazes() {
+    let _kits = super::support::kits_in_place();
+    let root = super::support::root();
+    let made = std::process::Command::new("make")
+        .args(["-s", "-C"])
+        .arg(root.join("bots/mms/c"))
+        .status()
+        .unwrap();
+    assert!(made.success());
+    for n in 1..=3 {
+        let maze = shared_maze(&format!("classic/test_maze_0{n}.txt"));
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("record.json");
+        let out = mazearena(&[
+            "run",
+            "--maze",
+            maze.to_str().unwrap(),
+            "--bot",
+            "bots/mms/c/floodfill",
+            "--protocol",
+            "mms",
+            "--replay",
+            file.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let record: Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        assert_eq!(record["status"], "finished", "maze {n}");
+        // Its ackReset was the task's reset, played at the centre: the step before run
+        // 1 ended in a goal cell.
+        let trace = record["trace"].as_array().unwrap();
+        let reset = trace
+            .iter()
+            .position(|s| s["event"] == "reset_accepted")
+            .unwrap_or_else(|| panic!("maze {n}: no reset in the trace"));
+        let before = &trace[reset - 1]["position"];
+        let dim = record["maze_dim"].as_i64().unwrap();
+        let goal = |v: &Value| (dim / 2 - 1..=dim / 2).contains(&v.as_i64().unwrap());
+        assert!(
+            goal(&before["x"]) && goal(&before["y"]),
+            "maze {n}: {before}"
+        );
+        // Its race moved several cells at once somewhere.
+        assert!(
+            trace[reset..]
+                .iter()
+                .any(|s| s["action"]["movement"].as_i64() > Some(1)),
+            "maze {n}"
+        );
+    }
+}

@@ -481,6 +481,8 @@ fn what_the_readme_examples_write_is_ignored_by_git() {
         "maze-16.txt",
         "maze-16.svg",
         "tournament.db",
+        "mms.db",
+        "bots/mms/c/floodfill",
         "bots/c/minimal_bot",
         "bots/cpp/minimal_bot",
         "bots/cpp/mazebot.o",
@@ -647,9 +649,11 @@ fn the_readme_local_examples_run_top_to_bottom() {
     }
     std::os::unix::fs::symlink(root().join("../shared"), dir.path().join("shared")).unwrap();
     let mut ran = 0;
+    let _kits = super::support::kits_in_place();
     for section in [
         "Testing a bot locally",
         "Tournaments without a server",
+        "Bring your mms mouse",
         "Maze tools",
     ] {
         for block in blocks(section) {
@@ -661,7 +665,13 @@ fn the_readme_local_examples_run_top_to_bottom() {
             if block.contains("udacity_adapter.py") {
                 assert!(out.contains("Task complete! Score:"), "{out}");
             }
-            if block.contains("mazearena tournament") {
+            if block.contains("--protocol mms") {
+                assert!(out.contains("Task complete! Score: 25.000"), "{out}");
+                assert!(
+                    out.contains("mms-floodfill-c") && out.contains("mms-floodfill-python"),
+                    "{out}"
+                );
+            } else if block.contains("mazearena tournament") {
                 assert!(out.contains("rank") && out.contains("minimal"), "{out}");
             }
             if block.contains("maze solve") {
@@ -669,7 +679,10 @@ fn the_readme_local_examples_run_top_to_bottom() {
             }
         }
     }
-    assert_eq!(ran, 3, "the adapter, the tournament, the maze tools");
+    assert_eq!(
+        ran, 4,
+        "the adapter, the tournament, the mms mice, the maze tools"
+    );
 }
 
 /// Whether a README shell block is run by a test of its own (the viewer, the numpy
@@ -694,6 +707,7 @@ fn every_readme_shell_example_is_run_by_a_test() {
         "Closing a competition",
         "Scaling out: PostgreSQL, API servers and workers",
         "Tournaments without a server",
+        "Bring your mms mouse",
         "Maze tools",
     ];
     let mut section = String::new();
