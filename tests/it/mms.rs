@@ -270,3 +270,144 @@ fn the_c_kits_mouse_calls_ack_reset_at_the_centre_and_finishes_the_classic_mazes
         );
     }
 }
+
+/// The cells a mouse process goes through under mms's rules (docs/PROTOCOL-mms.md, the
+/// facts of MMS-NOTES.md), answered here from the true maze: until it enters the goal
+/// room, calls `ackReset`, or has gone `cap` cells. Written from those rules, not from
+/// the referee.
+fn under_mms_rules(mouse: &str, maze: &mazearena::engine::Maze, cap: usize) -> Vec<(u32, u32)> {
+    use mazearena::engine::{Heading, Position};
+    use std::io::{BufRead, Write};
+    let mut child = std::process::Command::new("python3")
+        .arg(mouse)
+        .current_dir(super::support::root())
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut input = child.stdin.take().unwrap();
+    let output = std::io::BufReader::new(child.stdout.take().unwrap());
+    let (mut at, mut heading) = (Position { x: 0, y: 0 }, Heading::Up);
+    let mut path = vec![(0, 0)];
+    let dim = maze.dim();
+    'lines: for line in output.lines() {
+        let Ok(line) = line else { break };
+        let words: Vec<&str> = line.split(' ').filter(|w| !w.is_empty()).collect();
+        let turn = |h: Heading, quarters: usize| Heading::from_index(h.index() + quarters);
+        let answer = match words.as_slice() {
+            ["mazeWidth"] | ["mazeHeight"] => dim.to_string(),
+            [q, rest @ ..] if q.starts_with("wall") && rest.len() <= 1 => {
+                let rel = match *q {
+                    "wallFront" => 0,
+                    "wallRight" => 1,
+                    "wallBack" => 2,
+                    "wallLeft" => 3,
+                    _ => continue,
+                };
+                let n: u32 = rest.first().map_or(1, |t| t.parse().unwrap());
+                let open = maze.dist_to_wall(at, turn(heading, rel));
+                (open <= (n - 1) / 2).to_string()
+            }
+            ["turnLeft"] | ["turnLeft90"] => {
+                heading = turn(heading, 3);
+                "ack".into()
+            }
+            ["turnRight"] | ["turnRight90"] => {
+                heading = turn(heading, 1);
+                "ack".into()
+            }
+            ["moveForward", rest @ ..] => {
+                let n: i64 = rest.first().map_or(1, |t| t.parse().unwrap());
+                let mut answer = if n < 1 { "crash" } else { "ack" };
+                for _ in 0..n.max(0) {
+                    if !maze.is_open(at, heading) {
+                        answer = "crash";
+                        break;
+                    }
+                    at = at.step(heading, dim).unwrap();
+                    path.push((at.x, at.y));
+                    if maze.is_goal(at) || path.len() >= cap {
+                        break 'lines;
+                    }
+                }
+                answer.into()
+            }
+            ["wasReset"] => "false".into(),
+            ["ackReset"] => break,
+            _ => continue, // display commands and anything else: no answer
+        };
+        if writeln!(input, "{answer}").is_err() {
+            break;
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    path
+}
+
+/// The cells the robot went through in run 0 of `record`, until it first entered the
+/// goal room.
+fn run0_cells(record: &Value) -> Vec<(u32, u32)> {
+    let dim = record["maze_dim"].as_u64().unwrap() as u32;
+    let goal = |(x, y): (u32, u32)| {
+        (dim / 2 - 1..=dim / 2).contains(&x) && (dim / 2 - 1..=dim / 2).contains(&y)
+    };
+    let mut path = vec![(0u32, 0u32)];
+    for s in record["trace"].as_array().unwrap() {
+        if s["run"] != 0 || s["event"] == "reset_accepted" {
+            break;
+        }
+        let (tx, ty) = (
+            s["position"]["x"].as_u64().unwrap() as u32,
+            s["position"]["y"].as_u64().unwrap() as u32,
+        );
+        let (mut x, mut y) = *path.last().unwrap();
+        while (x, y) != (tx, ty) {
+            x = (x as i64 + (tx as i64 - x as i64).signum()) as u32;
+            y = (y as i64 + (ty as i64 - y as i64).signum()) as u32;
+            path.push((x, y));
+            if goal((x, y)) {
+                return path;
+            }
+        }
+    }
+    path
+}
+
+#[test]
+fn community_style_mice_take_their_mms_paths_in_run_0() {
+    let mice = [
+        "tests/fixtures/bots/mms/left_wall.py",
+        "tests/fixtures/bots/mms/stop_at_goal.py",
+        "tests/fixtures/bots/mms/dash.py",
+        "bots/mms/python/floodfill.py",
+    ];
+    for n in 1..=3 {
+        let text =
+            std::fs::read_to_string(shared_maze(&format!("classic/test_maze_0{n}.txt"))).unwrap();
+        let maze = mazearena::engine::mazefile::parse(text.as_bytes()).unwrap();
+        for mouse in mice {
+            let record = run_mouse(mouse, n, &[]);
+            let refereed = run0_cells(&record);
+            let model = under_mms_rules(mouse, &maze, 5000);
+            assert!(refereed.len() > 3, "{mouse} on maze {n}: {refereed:?}");
+            let reached = refereed
+                .last()
+                .is_some_and(|&(x, y)| maze.is_goal(mazearena::engine::Position { x, y }));
+            if reached {
+                assert_eq!(refereed, model, "{mouse} on maze {n}");
+            } else {
+                // The step budget ran out first: the same cells as far as it went.
+                // The step budget ran out, or the mouse gave up, before the centre: the
+                // same cells as far as the referee went.
+                assert!(model.len() >= refereed.len(), "{mouse} on maze {n}");
+                assert_eq!(refereed, model[..refereed.len()], "{mouse} on maze {n}");
+            }
+            if mouse.ends_with("stop_at_goal.py") {
+                // Asked wasReset at the centre: told true, it ran again and finished.
+                assert_eq!(record["status"], "finished", "{mouse} on maze {n}");
+            }
+        }
+    }
+}
