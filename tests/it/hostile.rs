@@ -858,3 +858,29 @@ async fn played_on_server(server: &TestServer, bot_id: i64, token: &str, seed: i
         .await;
     log["stderr_tail"].as_str().unwrap_or("").to_string()
 }
+
+/// The walls are the protocol's business of no one: an mms mouse is held as a v1 bot is.
+/// Each attack runs at the mouse's start; the mouse then waits for a start message that
+/// an mms mouse never gets, and times out.
+#[test]
+fn an_mms_mouse_is_held_by_the_same_walls() {
+    let Some(_) = full_sandbox("hostile mms") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("mazearena.db");
+    std::fs::write(&db, "SECRET").unwrap();
+    let outside = tmp.path().join("pwned.txt");
+    let mms = ["--protocol", "mms", "--startup-timeout-ms", "500"];
+    let r = attack_one_shot("read_file.py", &[db.to_str().unwrap()], &mms);
+    contained(&r, 1);
+    assert_eq!(r["status"], "timeout", "{r}");
+    let r = attack_one_shot("parent_environ.py", &[], &mms);
+    contained(&r, 1);
+    let r = attack_one_shot("write_outside.py", &[outside.to_str().unwrap()], &mms);
+    contained(&r, 1);
+    assert!(!outside.exists());
+    let r = attack_one_shot("setsid_escape.py", &["4172"], &mms);
+    assert!(stderr(&r).contains("grandchild"), "{}", stderr(&r));
+    assert!(processes_matching("sleep 4172").is_empty());
+}
