@@ -461,6 +461,11 @@ impl Mouse {
         Some(serde_json::Value::Object(object).to_string())
     }
 
+    /// Whether run 0 has reached the goal and the task waits for the mouse's reset.
+    pub fn waits_for_run_1(&self) -> bool {
+        self.run == 0 && self.in_goal_this_run
+    }
+
     /// The warnings kept, and how many unknown commands there were in all.
     pub fn warnings(&self) -> (&[String], u64) {
         (&self.warnings, self.unknown_count)

@@ -354,6 +354,13 @@ pub async fn run_match(
         (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);
         if record.status == MatchStatus::Crashed && f.reason.starts_with(session::CLOSED_STDOUT) {
             f.reason = ended_reason(&f);
+            if mouse.as_ref().is_some_and(|m| m.waits_for_run_1()) {
+                f.reason.push_str(
+                    " after reaching the goal in run 0: an mms mouse gets its second run by \
+                     asking wasReset, calling ackReset, or coming back to the start \
+                     (docs/PROTOCOL-mms.md, \"Runs\")",
+                );
+            }
         }
         if let Some(reason) = setup_failure(&ended, sandbox) {
             // The jail could not start the bot's program: it never ran.

@@ -411,3 +411,14 @@ fn community_style_mice_take_their_mms_paths_in_run_0() {
         }
     }
 }
+
+#[test]
+fn a_mouse_that_exits_at_the_goal_is_told_how_to_get_its_second_run() {
+    let record = run_mouse("tests/fixtures/bots/mms/stop_at_goal.py --exit", 1, &[]);
+    assert_eq!(record["status"], "crashed", "{record}");
+    let reason = record["error"]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("exited with status 0") && reason.contains("asking wasReset"),
+        "{reason}"
+    );
+}
