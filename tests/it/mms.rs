@@ -8,12 +8,21 @@ use serde_json::Value;
 
 use super::support::{mazearena, processes_matching, shared_maze};
 
+/// The command that runs `mouse`: a Python file through `python3`, anything else as it is.
+fn command_of(mouse: &str) -> String {
+    if mouse.split(' ').next().is_some_and(|m| m.ends_with(".py")) {
+        format!("python3 {mouse}")
+    } else {
+        mouse.to_string()
+    }
+}
+
 /// `run --protocol mms` of `mouse` on classic maze `n`, with `extra` flags: the whole
 /// record with its trace (`--replay`; the run may end in any status: the exit code is
 /// not looked at).
 fn run_mouse(mouse: &str, n: u32, extra: &[&str]) -> Value {
     let maze = shared_maze(&format!("classic/test_maze_0{n}.txt"));
-    let bot = format!("python3 {mouse}");
+    let bot = command_of(mouse);
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("record.json");
     let mut args = vec![
@@ -278,8 +287,9 @@ fn the_c_kits_mouse_calls_ack_reset_at_the_centre_and_finishes_the_classic_mazes
 fn under_mms_rules(mouse: &str, maze: &mazearena::engine::Maze, cap: usize) -> Vec<(u32, u32)> {
     use mazearena::engine::{Heading, Position};
     use std::io::{BufRead, Write};
-    let mut child = std::process::Command::new("python3")
-        .arg(mouse)
+    let words = shlex::split(&command_of(mouse)).unwrap();
+    let mut child = std::process::Command::new(&words[0])
+        .args(&words[1..])
         .current_dir(super::support::root())
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
@@ -382,7 +392,16 @@ fn community_style_mice_take_their_mms_paths_in_run_0() {
         "tests/fixtures/bots/mms/stop_at_goal.py",
         "tests/fixtures/bots/mms/dash.py",
         "bots/mms/python/floodfill.py",
+        // Calls ackReset at the centre.
+        "bots/mms/c/floodfill",
     ];
+    let _kits = super::support::kits_in_place();
+    let made = std::process::Command::new("make")
+        .args(["-s", "-C"])
+        .arg(super::support::root().join("bots/mms/c"))
+        .status()
+        .unwrap();
+    assert!(made.success());
     for n in 1..=3 {
         let text =
             std::fs::read_to_string(shared_maze(&format!("classic/test_maze_0{n}.txt"))).unwrap();
@@ -420,5 +439,76 @@ fn a_mouse_that_exits_at_the_goal_is_told_how_to_get_its_second_run() {
     assert!(
         reason.contains("exited with status 0") && reason.contains("asking wasReset"),
         "{reason}"
+    );
+}
+
+#[test]
+fn the_protocols_doc_shows_a_real_exchange_and_the_kits_real_scores() {
+    let doc = std::fs::read_to_string(super::support::root().join("docs/PROTOCOL-mms.md")).unwrap();
+    // The exchange in the doc: its mouse lines, in order, with their answers.
+    let block = doc
+        .split("## A whole exchange")
+        .nth(1)
+        .and_then(|s| s.split("```text").nth(1))
+        .and_then(|s| s.split("```").next())
+        .expect("the doc's exchange");
+    let shown: Vec<(String, String)> = block
+        .lines()
+        .filter_map(|l| l.strip_prefix("mouse: "))
+        .filter_map(|l| {
+            let (line, rest) = l.split_once("  ")?;
+            let answer = rest.trim();
+            let answer = answer.strip_prefix("referee: ").unwrap_or(answer);
+            // A move's answer comes after its step: shown on a line of its own.
+            let answer = if answer.starts_with("->") {
+                "ack"
+            } else {
+                answer
+            };
+            Some((line.trim().to_string(), answer.to_string()))
+        })
+        .collect();
+    assert!(shown.len() > 10, "{shown:?}");
+    let record = run_mouse(
+        "tests/fixtures/bots/mms/relay.py python3 bots/mms/python/floodfill.py",
+        1,
+        &[],
+    );
+    assert_eq!(record["status"], "finished", "{record}");
+    let log = record["stderr_tail"].as_str().unwrap();
+    let real: Vec<(String, String)> = log
+        .lines()
+        .filter_map(|l| l.strip_prefix("mouse: "))
+        .filter_map(|l| {
+            let (line, rest) = l.split_once("  ")?;
+            let answer = rest.trim();
+            let answer = answer.strip_prefix("referee: ").unwrap_or(answer);
+            Some((line.trim().to_string(), answer.to_string()))
+        })
+        .collect();
+    // Each shown exchange is the real one, in the same order (the doc leaves some out).
+    let mut at = 0;
+    for (line, answer) in &shown {
+        let found = real[at..]
+            .iter()
+            .position(|(l, a)| l == line && a == answer)
+            .unwrap_or_else(|| {
+                panic!("{line} -> {answer} is not in the real exchange after line {at}")
+            });
+        at += found + 1;
+    }
+    // The doc's first lines are the real first lines.
+    assert_eq!(real[..shown.len().min(6)], shown[..shown.len().min(6)]);
+    // And its scores are the kit's.
+    let scores: Vec<String> = (1..=3)
+        .map(|n| {
+            let r = run_mouse("bots/mms/python/floodfill.py", n, &[]);
+            format!("{:.3}", r["score"].as_f64().unwrap())
+        })
+        .collect();
+    let line = format!("{}, {} and {}", scores[0], scores[1], scores[2]);
+    assert!(
+        doc.contains(&line),
+        "the doc gives the kit's scores as {line}"
     );
 }
