@@ -207,21 +207,29 @@ async fn an_mms_mouse_uploaded_with_protocol_mms_is_validated_and_plays_on_a_ser
         built["build_status"], "ready",
         "the validation match played it: {built}"
     );
-    // Classic maze 1, added as a public maze.
-    let layout = std::fs::read_to_string(shared_maze("classic/test_maze_01.txt")).unwrap();
-    let (s, maze) = server
-        .post(
-            "/api/mazes",
-            json!({"name": "classic-1", "layout": layout}),
-            Some(super::support::ADMIN),
-        )
-        .await;
-    assert_eq!(s, 201, "{maze}");
-    let classic = maze["maze_id"].as_i64().unwrap();
-    let m = queue(&server, id, classic, 1, &token).await;
-    let done = wait_match(&server, m).await;
-    assert_eq!(done["status"], "finished", "{done}");
-    assert_eq!(done["score"], 25.0, "the same as `run` gives: {done}");
+    // The classic mazes, added as public mazes: the scores `run` gives.
+    for n in 1..=3 {
+        let layout =
+            std::fs::read_to_string(shared_maze(&format!("classic/test_maze_0{n}.txt"))).unwrap();
+        let (s, maze) = server
+            .post(
+                "/api/mazes",
+                json!({"name": format!("classic-{n}"), "layout": layout}),
+                Some(super::support::ADMIN),
+            )
+            .await;
+        assert_eq!(s, 201, "{maze}");
+        let classic = maze["maze_id"].as_i64().unwrap();
+        let m = queue(&server, id, classic, 1, &token).await;
+        let done = wait_match(&server, m).await;
+        assert_eq!(done["status"], "finished", "maze {n}: {done}");
+        let local = run_mouse("bots/mms/python/floodfill.py", n, &[]);
+        assert_eq!(
+            done["score"], local["score"],
+            "maze {n}: the same as `run` gives"
+        );
+        assert_eq!(done["total_steps"], local["total_steps"], "maze {n}");
+    }
 }
 
 #[test]
