@@ -44,6 +44,15 @@ async fn wait_for(b: &Browser, url: &str, css: &str, secs: u64) {
     }
 }
 
+/// Waits (at most 10 s) until the browser is at `path` (a form post's redirect done).
+async fn wait_at(b: &Browser, path: &str) {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while b.client.current_url().await.unwrap().path() != path {
+        assert!(Instant::now() < deadline, "never got to {path}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
 /// Types `text` into the field `css`.
 async fn fill(b: &Browser, css: &str, text: &str) {
     b.client
@@ -166,6 +175,8 @@ async fn a_student_takes_part_from_the_browser_alone() {
     b.click("input[name=original_task]").await;
     b.screenshot("student-3-submit").await;
     b.click("form.submit button[type=submit]").await;
+    // The upload's redirect before the page is read again (leaving earlier would cancel it).
+    wait_at(&b, "/me").await;
 
     // Build and validation shown on "me".
     wait_for(
@@ -186,6 +197,21 @@ async fn a_student_takes_part_from_the_browser_alone() {
 
     // Practice: the match, with the student's stderr in the viewer.
     b.click("form.practice button[type=submit]").await;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !b
+        .client
+        .current_url()
+        .await
+        .unwrap()
+        .path()
+        .starts_with("/matches/")
+    {
+        assert!(
+            Instant::now() < deadline,
+            "the practice did not lead to its match"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
     let deadline = Instant::now() + Duration::from_secs(90);
     loop {
         if b.client.find(Locator::Css("#viewer")).await.is_ok() {
@@ -254,6 +280,8 @@ async fn an_organiser_runs_a_competition_from_the_browser() {
     b.open(&format!("{base}/login"), "input[name=key]").await;
     fill(&b, "input[name=key]", ADMIN).await;
     b.click("form button[type=submit]").await;
+    // The login's redirect (and its cookie) before the next page.
+    wait_at(&b, "/me").await;
     b.open(&format!("{base}/admin"), "form.organiser").await;
     fill(&b, "form.organiser input[name=name]", "teacher").await;
     b.click("form.organiser button[type=submit]").await;
@@ -291,6 +319,7 @@ async fn an_organiser_runs_a_competition_from_the_browser() {
     b.open(&format!("{base}/login"), "input[name=key]").await;
     fill(&b, "input[name=key]", &organiser).await;
     b.click("form button[type=submit]").await;
+    wait_at(&b, "/me").await;
     let folder = dir.path().join("cup");
     std::fs::create_dir_all(folder.join("mazes")).unwrap();
     let now = mazearena::storage::now_ms();
