@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use axum::extract::{FromRequest, Multipart, Query, Request, State};
+use axum::extract::{Query, Request, State};
 use axum::http::StatusCode;
 use axum::response::{Html, IntoResponse, Response};
 use serde::Deserialize;
@@ -161,18 +161,25 @@ pub(super) async fn register(
         state.storage.end_session(&old.hash).await?;
     }
     let cookie = session::open(&state, &hash_token(&created.key), secure).await?;
-    let mut response = Html(account::registered(&created.name, &created.key)).into_response();
+    Ok(key_page(
+        account::registered(&created.name, &created.key),
+        cookie,
+    ))
+}
+
+/// A page that shows a new key, with the new session's cookie; no cache keeps it.
+fn key_page(html: String, cookie: cookie::Cookie<'static>) -> Response {
+    let mut response = Html(html).into_response();
     if let Ok(v) = axum::http::HeaderValue::from_str(&cookie.to_string()) {
         response
             .headers_mut()
             .append(axum::http::header::SET_COOKIE, v);
     }
-    // The key is in this page: no cache keeps it.
     response.headers_mut().insert(
         axum::http::header::CACHE_CONTROL,
         axum::http::HeaderValue::from_static("no-store"),
     );
-    Ok(response)
+    response
 }
 
 /// Who the caller is, in words, and its kind.
@@ -421,24 +428,11 @@ async fn read_submission(
     visitor: &Visitor,
     request: Request,
 ) -> PageResult<Upload> {
-    let mut form = Multipart::from_request(request, state)
-        .await
-        .map_err(ApiError::from)?;
+    let mut form = super::forms::multipart_after_token(state, visitor, request).await?;
     let mut upload = Upload::default();
     let mut files: BTreeMap<String, String> = BTreeMap::new();
-    let mut first = true;
     while let Some(field) = form.next_field().await.map_err(ApiError::from)? {
         let name = field.name().unwrap_or("").to_string();
-        if first {
-            first = false;
-            let token = if name == session::CSRF_FIELD {
-                Some(field.text().await.map_err(ApiError::from)?)
-            } else {
-                None
-            };
-            visitor.check_csrf(token.as_deref())?;
-            continue;
-        }
         match name.as_str() {
             "name" => upload.name = Some(field.text().await.map_err(ApiError::from)?.trim().into()),
             "command" => upload.command = field.text().await.map_err(ApiError::from)?,
@@ -483,9 +477,6 @@ async fn read_submission(
                 ));
             }
         }
-    }
-    if first {
-        visitor.check_csrf(None)?;
     }
     if !files.is_empty() {
         upload.files = Some(files);
@@ -547,15 +538,5 @@ pub(super) async fn rotate_key(
     let new = super::super::entrants::rotate(&state, &visitor.caller, e.entrant_id).await?;
     // This session ended with the old key: the visitor goes on with a new one.
     let cookie = session::open(&state, &hash_token(&new.key), secure).await?;
-    let mut response = Html(account::replaced(&e.name, &new.key)).into_response();
-    if let Ok(v) = axum::http::HeaderValue::from_str(&cookie.to_string()) {
-        response
-            .headers_mut()
-            .append(axum::http::header::SET_COOKIE, v);
-    }
-    response.headers_mut().insert(
-        axum::http::header::CACHE_CONTROL,
-        axum::http::HeaderValue::from_static("no-store"),
-    );
-    Ok(response)
+    Ok(key_page(account::replaced(&e.name, &new.key), cookie))
 }

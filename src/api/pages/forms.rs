@@ -1,7 +1,7 @@
 //! What the pages' forms share: errors answered as pages (never JSON), redirects, the
 //! client's address, and reading a urlencoded form into a struct.
 
-use axum::extract::{ConnectInfo, FromRequest, Request};
+use axum::extract::{ConnectInfo, FromRequest, Multipart, Request};
 use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use serde::de::DeserializeOwned;
@@ -177,6 +177,26 @@ pub(super) fn local_next(next: Option<&str>) -> String {
         }
         _ => "/me".to_string(),
     }
+}
+
+/// Opens a multipart form whose first field must be the session's anti-forgery token:
+/// checked before any other field (a file above all) is read. Answers the form past it.
+pub(super) async fn multipart_after_token(
+    state: &AppState,
+    visitor: &Visitor,
+    request: Request,
+) -> PageResult<Multipart> {
+    let mut form = Multipart::from_request(request, state)
+        .await
+        .map_err(ApiError::from)?;
+    let token = match form.next_field().await.map_err(ApiError::from)? {
+        Some(field) if field.name() == Some(super::super::session::CSRF_FIELD) => {
+            Some(field.text().await.map_err(ApiError::from)?)
+        }
+        _ => None,
+    };
+    visitor.check_csrf(token.as_deref())?;
+    Ok(form)
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use axum::Router;
-use axum::extract::{DefaultBodyLimit, FromRequest, Multipart, Request, State};
+use axum::extract::{DefaultBodyLimit, Request, State};
 use axum::http::StatusCode;
 use axum::response::{Html, IntoResponse};
 use axum::routing::{get, post};
@@ -15,7 +15,7 @@ use serde::Deserialize;
 use super::super::AppState;
 use super::super::auth::Caller;
 use super::super::error::{ApiError, AppPath};
-use super::super::session::{self, Visitor};
+use super::super::session::Visitor;
 use super::forms::{PageError, PageResult, login_first, read_form, see_other};
 use crate::competition::{MazeText, Spec, Timestamp};
 use crate::registry::competitions::{self as ops, Patch, RejudgeRequest};
@@ -108,25 +108,12 @@ async fn read_creation(
     visitor: &Visitor,
     request: Request,
 ) -> PageResult<Spec<MazeText>> {
-    let mut form = Multipart::from_request(request, state)
-        .await
-        .map_err(ApiError::from)?;
-    let mut first = true;
+    let mut form = super::forms::multipart_after_token(state, visitor, request).await?;
     let mut file: Option<String> = None;
     let mut files: BTreeMap<String, String> = BTreeMap::new();
     let mut archive: Option<Vec<u8>> = None;
     while let Some(field) = form.next_field().await.map_err(ApiError::from)? {
         let name = field.name().unwrap_or("").to_string();
-        if first {
-            first = false;
-            let token = if name == session::CSRF_FIELD {
-                Some(field.text().await.map_err(ApiError::from)?)
-            } else {
-                None
-            };
-            visitor.check_csrf(token.as_deref())?;
-            continue;
-        }
         let file_name = field.file_name().unwrap_or("").to_string();
         let bytes = field.bytes().await.map_err(ApiError::from)?;
         if bytes.is_empty() {
@@ -153,9 +140,6 @@ async fn read_creation(
                 ));
             }
         }
-    }
-    if first {
-        visitor.check_csrf(None)?;
     }
     if let Some(bytes) = archive {
         if file.is_some() || !files.is_empty() {
