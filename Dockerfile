@@ -29,13 +29,16 @@ FROM debian:bookworm-slim
 RUN apt-get update \
     && apt-get install -y --no-install-recommends python3 python3-numpy python3-pandas python3-scipy nodejs tini ca-certificates bubblewrap gcc g++ make libc6-dev \
     && rm -rf /var/lib/apt/lists/* \
-    && useradd --system --create-home --home-dir /var/lib/mazearena mazearena \
+    && groupadd --system --gid 999 mazearena \
+    && useradd --system --uid 999 --gid 999 --create-home --home-dir /var/lib/mazearena mazearena \
     && mkdir -p /var/lib/mazearena/db /var/lib/mazearena/bots \
     && chown -R mazearena:mazearena /var/lib/mazearena
 COPY --from=binary /mazearena /usr/local/bin/mazearena
 COPY bots /opt/mazearena/bots
 COPY mazes /opt/mazearena/mazes
-USER mazearena
+# A fixed uid and gid (999): Kubernetes' runAsUser and runAsNonRoot name it
+# (deploy/kubernetes/), and volumes made by an earlier image keep their owner.
+USER 999:999
 WORKDIR /var/lib/mazearena
 ENV MAZEARENA_BIND=0.0.0.0:8080 \
     MAZEARENA_DATABASE=sqlite:///var/lib/mazearena/db/mazearena.db \

@@ -30,7 +30,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${1:-target/debug/mazearena}
-CONTAINERS=(mazearena mazearena-api mazearena-worker-1 mazearena-worker-2)
+CONTAINERS=(mazearena mazearena-api mazearena-worker-1 mazearena-worker-2 mazearena-k8s-worker)
 VOLUMES=(mazearena-db mazearena-bots)
 SCALE_DB=mazearena_image_scale
 ours=
@@ -203,6 +203,32 @@ say "the README's podman run again on the same volumes: match 1 still $again"
 podman stop mazearena >/dev/null
 say "the single server passed in $(($(date +%s) - started)) s"
 
+# Waits for tournament ID (TOTAL matches) to end; fails unless each match is as on the host.
+check_tournament() {
+  local id=$1 total=$2 progress= bad
+  for _ in $(seq 600); do
+    progress=$(curl -s "$api/api/tournaments/$id" | json '"%d/%d" % (d["done"], d["total"])' 2>/dev/null || true)
+    [ -n "$progress" ] && [ "${progress%/*}" = "${progress#*/}" ] && break
+    sleep 0.2
+  done
+  [ "$progress" = "$total/$total" ] || fail "tournament $id did not end: $progress"
+  bad=$(curl -s "$api/api/matches?tournament_id=$id&limit=200" | python3 -c '
+import json, subprocess, sys
+bots = {1: ("python3 simple_bot.py", "bots/python"), 2: ("node minimal_bot.js", "bots/javascript")}
+mazes = dict(zip(sys.argv[2].split(","), sys.argv[4:]))
+items = json.load(sys.stdin)["items"]
+bad = [] if len(items) == int(sys.argv[3]) else ["%d matches listed" % len(items)]
+for m in items:
+    command, folder = bots[m["bot_id"]]
+    host = json.loads(subprocess.run([sys.argv[1], "run", "--maze", "mazes/%s.txt" % mazes[str(m["maze_id"])],
+        "--bot", command, "--bot-dir", folder, "--seed", str(m["seed"]), "--json"],
+        check=True, capture_output=True, text=True).stdout)
+    if (m["status"], m["score"]) != (host["status"], host["score"]):
+        bad.append("match %d: %s %s, on the host %s %s" % (m["match_id"], m["status"], m["score"], host["status"], host["score"]))
+print("; ".join(bad))' "$BIN" "$ids" "$total" "${mazes[@]}")
+  [ -z "$bad" ] || fail "tournament $id's matches: $bad"
+}
+
 # --- the scale profile --------------------------------------------------------------
 if [ -z "${MAZEARENA_TEST_POSTGRES:-}" ]; then
   skip "the scale profile: MAZEARENA_TEST_POSTGRES is not set (.ci/postgres.sh start DIR)"
@@ -228,28 +254,7 @@ mazes=(gen-12-s1 gen-12-s2 gen-14-s1)
 ids=$(for m in "${mazes[@]}"; do maze_id "$m"; done | paste -sd,)
 curl -s "$api/api/tournaments" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN" -H 'content-type: application/json' \
   -d "{\"name\": \"image-scale\", \"bot_ids\": [1, 2], \"maze_ids\": [$ids], \"repeats\": 2}" >/dev/null
-progress=
-for _ in $(seq 600); do
-  progress=$(curl -s "$api/api/tournaments/1" | json '"%d/%d" % (d["done"], d["total"])' 2>/dev/null || true)
-  [ -n "$progress" ] && [ "${progress%/*}" = "${progress#*/}" ] && break
-  sleep 0.2
-done
-[ "$progress" = 12/12 ] || fail "the tournament did not end: $progress"
-bad=$(curl -s "$api/api/matches?tournament_id=1&limit=200" | python3 -c '
-import json, subprocess, sys
-bots = {1: ("python3 simple_bot.py", "bots/python"), 2: ("node minimal_bot.js", "bots/javascript")}
-mazes = dict(zip(sys.argv[2].split(","), sys.argv[3:]))
-items = json.load(sys.stdin)["items"]
-bad = [] if len(items) == 12 else ["%d matches listed" % len(items)]
-for m in items:
-    command, folder = bots[m["bot_id"]]
-    host = json.loads(subprocess.run([sys.argv[1], "run", "--maze", "mazes/%s.txt" % mazes[str(m["maze_id"])],
-        "--bot", command, "--bot-dir", folder, "--seed", str(m["seed"]), "--json"],
-        check=True, capture_output=True, text=True).stdout)
-    if (m["status"], m["score"]) != (host["status"], host["score"]):
-        bad.append("match %d: %s %s, on the host %s %s" % (m["match_id"], m["status"], m["score"], host["status"], host["score"]))
-print("; ".join(bad))' "$BIN" "$ids" "${mazes[@]}")
-[ -z "$bad" ] || fail "the tournament's matches: $bad"
+check_tournament 1 12
 # Each worker reports its count every few seconds.
 for _ in $(seq 60); do
   done_by=$(curl -s "$api/healthz" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN" | json '" ".join(str(w["matches_done"]) for w in d["workers"] if w["role"] == "worker")')
@@ -259,8 +264,35 @@ done
 for n in $done_by; do [ "$n" -gt 0 ] || fail "a worker played no match: $done_by"; done
 [ $((${done_by// /+})) = 12 ] || fail "the workers report $done_by matches, not 12"
 say "a tournament of 12 matches played to the end, each as on the host; matches by worker: $done_by"
-podman stop mazearena-api mazearena-worker-1 mazearena-worker-2 >/dev/null
+podman stop mazearena-worker-1 mazearena-worker-2 >/dev/null
 for w in 1 2; do
   podman logs "mazearena-worker-$w" 2>&1 | grep -q "mazearena worker stopped" || fail "worker $w: no clean stop"
 done
 say "the scale profile passed in $(($(date +%s) - started)) s"
+
+# --- the Kubernetes worker's pod ----------------------------------------------------
+# deploy/kubernetes/worker.yaml's pod spec, given to podman option for option by
+# .ci/kube_podman.py (a user namespace of the pod's own, the lifted seccomp and AppArmor
+# profiles and /proc masking, no capability, no_new_privs, a read-only root with its two
+# emptyDirs, its CPU and memory, its variables): with the README's workers stopped, this
+# worker alone plays a second tournament, every match as on the host, and stops cleanly
+# on SIGTERM within the pod's terminationGracePeriodSeconds.
+started=$(date +%s)
+python3 -c 'import yaml' 2>/dev/null || python3 -m pip install -q pyyaml
+kopts=$(python3 .ci/kube_podman.py deploy/kubernetes/worker.yaml) || fail "kube_podman: $kopts"
+say "the Kubernetes worker's pod as podman options: $kopts"
+eval "podman run -d --name mazearena-k8s-worker --network host --no-healthcheck $kopts \
+  -e MAZEARENA_DATABASE=\"\$MAZEARENA_DATABASE\" localhost/mazearena:latest worker" >/dev/null 2>"$STEP_LOG" ||
+  fail "podman run of the Kubernetes worker: $(cat "$STEP_LOG")"
+curl -s "$api/api/tournaments" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN" -H 'content-type: application/json' \
+  -d "{\"name\": \"image-k8s\", \"bot_ids\": [1, 2], \"maze_ids\": [$ids], \"repeats\": 1}" >/dev/null
+check_tournament 2 6
+podman logs mazearena-k8s-worker 2>&1 | grep -q "sandbox full" || fail "the Kubernetes worker did not say 'sandbox full'"
+grace=$(python3 -c 'import sys, yaml; d = next(x for x in yaml.safe_load_all(open(sys.argv[1])) if x["kind"] == "Deployment"); print(d["spec"]["template"]["spec"]["terminationGracePeriodSeconds"])' deploy/kubernetes/worker.yaml)
+t0=$(date +%s%N)
+podman stop -t "$grace" mazearena-k8s-worker >/dev/null
+stopped_ms=$((($(date +%s%N) - t0) / 1000000))
+podman logs mazearena-k8s-worker 2>&1 | grep -q "mazearena worker stopped" || fail "the Kubernetes worker: no clean stop"
+[ "$stopped_ms" -lt $((grace * 1000)) ] || fail "the Kubernetes worker took ${stopped_ms} ms to stop (grace ${grace} s)"
+say "the Kubernetes worker's pod played 6 matches alone, each as on the host (sandbox full), and stopped in ${stopped_ms} ms ($(($(date +%s) - started)) s)"
+podman stop mazearena-api >/dev/null

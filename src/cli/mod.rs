@@ -5,6 +5,7 @@ mod client;
 mod competition;
 mod matches;
 mod maze;
+mod migrate;
 mod prune;
 mod replay;
 mod report;
@@ -42,6 +43,9 @@ pub enum Command {
     Serve(serve::ServeArgs),
     /// Only play matches, from the database the servers use (scale-out on PostgreSQL).
     Worker(worker::WorkerArgs),
+    /// Bring the database's schema up to date and print its version (servers and workers
+    /// also do it on start; a rollout runs it once first).
+    Migrate(migrate::MigrateArgs),
     /// Run a tournament locally (no server): every bot on every maze, into the database.
     Tournament(tournament::TournamentArgs),
     /// Show each isolation mechanism of the sandbox and whether it works here.
@@ -123,6 +127,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Maze(cmd) => maze::run(cmd),
         Command::Serve(args) => serve::run(args),
         Command::Worker(args) => worker::run(args),
+        Command::Migrate(args) => migrate::run(args),
         Command::Tournament(args) => tournament::run(args),
         Command::Doctor(args) => sandbox::doctor(args),
         Command::Replay(args) => replay::run(args),
@@ -172,9 +177,12 @@ pub(crate) async fn open_existing(url: &str) -> anyhow::Result<crate::storage::S
             "no database at {file} (give --database, or set MAZEARENA_DATABASE)"
         );
     }
-    crate::storage::Storage::open(url)
-        .await
-        .with_context(|| format!("cannot open the database {url}"))
+    crate::storage::Storage::open(url).await.with_context(|| {
+        format!(
+            "cannot open the database {}",
+            crate::storage::redacted_url(url)
+        )
+    })
 }
 
 /// Reads and parses a maze file of either format, with the file name in the error.

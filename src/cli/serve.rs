@@ -253,11 +253,14 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 .context("refusing to serve without the sandbox")?,
         )
     };
-    let storage = args.pool.storage(
-        Storage::open(&args.database)
-            .await
-            .with_context(|| format!("cannot open the database {}", args.database))?,
-    );
+    let storage = args
+        .pool
+        .storage(Storage::open(&args.database).await.with_context(|| {
+            format!(
+                "cannot open the database {}",
+                crate::storage::redacted_url(&args.database)
+            )
+        })?);
     // PostgreSQL may restart while the server starts: the start-up work (all of it safe
     // to do twice) is tried again for as long as the connection itself would be.
     match storage.backend() {

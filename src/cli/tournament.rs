@@ -146,9 +146,12 @@ async fn play(
     sandbox: runner::Sandbox,
     maze_files: Vec<PathBuf>,
 ) -> anyhow::Result<()> {
-    let storage = Storage::open(&args.database)
-        .await
-        .with_context(|| format!("cannot open the database {}", args.database))?;
+    let storage = Storage::open(&args.database).await.with_context(|| {
+        format!(
+            "cannot open the database {}",
+            crate::storage::redacted_url(&args.database)
+        )
+    })?;
     storage.requeue_expired().await?;
     let mut version_ids = Vec::new();
     for b in &bots {

@@ -48,11 +48,14 @@ async fn work(args: WorkerArgs) -> anyhow::Result<()> {
         .sandbox
         .open(&hidden_paths(&data_dir, &args.database), false)
         .context("refusing to play matches without the sandbox")?;
-    let storage = args.pool.storage(
-        Storage::open(&args.database)
-            .await
-            .with_context(|| format!("cannot open the database {}", args.database))?,
-    );
+    let storage = args
+        .pool
+        .storage(Storage::open(&args.database).await.with_context(|| {
+            format!(
+                "cannot open the database {}",
+                crate::storage::redacted_url(&args.database)
+            )
+        })?);
     let jobs = args.pool.jobs(1);
     let level = sandbox.level();
     let shutdown = Shutdown::default();

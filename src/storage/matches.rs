@@ -162,6 +162,25 @@ const FAIR_ORDER: &str = "
     where m.status = 'queued'
     order by coalesce(c.served, 0), h.class, coalesce(l.served, 0), h.match_id";
 
+/// The work for match workers, in matches, for an autoscaler of workers: the queued
+/// matches a worker may claim now (the condition of [`Storage::claim_next`]: the version
+/// is built and ready, the bot is not paused), the matches being played, and the versions
+/// waiting for or in their build (a build, and the validation match after it, takes a
+/// worker's slot like a match). Queued matches that cannot be claimed (a paused bot, a
+/// version still building) are not counted: more workers would not play them sooner.
+///
+/// KEDA's PostgreSQL scaler runs exactly this statement
+/// (`deploy/kubernetes/worker-scaler.yaml`; a test checks that the two are the same and
+/// runs the manifest's copy on PostgreSQL). Each count is an index seek (`match_status`,
+/// `bot_version_build`): it stays cheap on a database of millions of finished matches.
+pub const WORK_FOR_WORKERS: &str = "select
+  (select count(*) from match m
+     join bot_version v on v.bot_version_id = m.bot_version_id
+     join bot b on b.bot_id = v.bot_id
+   where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready')
+  + (select count(*) from match where status = 'running')
+  + (select count(*) from bot_version where build_status = 'building')";
+
 /// Bot `b` has the same owner as bot `$1`: the same entrant, or (for bots of no
 /// entrant) the same owner token.
 const SAME_OWNER: &str = "b.bot_id in (
@@ -451,6 +470,17 @@ impl Storage {
         let match_id = insert_single(&mut tx, bot_version_id, maze_id, seed).await?;
         tx.commit().await?;
         Ok(Ok(match_id))
+    }
+
+    /// The work waiting for match workers now, as [`WORK_FOR_WORKERS`] counts it (the
+    /// number an autoscaler of workers reads).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn work_for_workers(&self) -> Result<i64> {
+        Ok(sqlx::query_scalar(WORK_FOR_WORKERS)
+            .fetch_one(self.pool())
+            .await?)
     }
 
     /// The number of matches waiting to be played.
@@ -959,6 +989,66 @@ mod tests {
             "warnings": [], "error": null, "stderr_tail": "", "timings": {"wall_ms": 1, "bot_cpu_ms": null, "max_answer_us": 1, "mean_answer_us": 1}
         }))
         .unwrap()
+    }
+
+    /// The scaler's count: claimable queued matches, running ones and builds; never the
+    /// matches of a paused bot or of a version still building, nor finished ones.
+    #[tokio::test]
+    async fn the_work_for_workers_counts_what_a_worker_could_take() {
+        for (db, _guard) in backends().await {
+            let (v, z) = bot_and_maze(&db).await;
+            assert_eq!(db.work_for_workers().await.unwrap(), 0);
+            for seed in 0..3 {
+                db.queue_match(v, z, seed).await.unwrap();
+            }
+            assert_eq!(db.work_for_workers().await.unwrap(), 3, "three queued");
+            let claimed = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            assert_eq!(
+                db.work_for_workers().await.unwrap(),
+                3,
+                "two queued, one running"
+            );
+            db.release_match(claimed.match_id, "w").await.unwrap();
+            assert_eq!(
+                db.work_for_workers().await.unwrap(),
+                3,
+                "released: queued again"
+            );
+            let claimed = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
+            db.complete_match(
+                claimed.match_id,
+                "w",
+                &record(crate::runner::MatchStatus::Finished),
+                &maze(),
+            )
+            .await
+            .unwrap();
+            assert_eq!(db.work_for_workers().await.unwrap(), 2, "one finished");
+            // A paused bot's queued matches wait for nothing a worker can do.
+            let paused = db
+                .create_bot("p", "h2", &crate::storage::test_support::plain_version())
+                .await
+                .unwrap();
+            db.queue_match(paused.bot_version_id, z, 0).await.unwrap();
+            assert_eq!(db.work_for_workers().await.unwrap(), 3);
+            db.pause_bot(paused.bot_id, "test").await.unwrap();
+            assert_eq!(
+                db.work_for_workers().await.unwrap(),
+                2,
+                "paused: not counted"
+            );
+            // A version waiting for its build is one piece of work, its matches none yet.
+            let built = db
+                .create_bot("c", "h3", &crate::storage::test_support::with_build())
+                .await
+                .unwrap();
+            db.queue_match(built.bot_version_id, z, 0).await.unwrap();
+            assert_eq!(
+                db.work_for_workers().await.unwrap(),
+                3,
+                "the build, not its match"
+            );
+        }
     }
 
     /// Two processes on one SQLite file (two storages: each has its own write turn)

@@ -69,7 +69,7 @@ pub enum StorageError {
     /// The database URL is malformed.
     #[error("invalid database URL {url:?}: {source}")]
     Url {
-        /// The URL given.
+        /// The URL given, without its password.
         url: String,
         /// What sqlx said.
         source: sqlx::Error,
@@ -142,6 +142,19 @@ pub struct Storage {
     options: AnyConnectOptions,
 }
 
+/// A database `url` without its password, for messages: a log (a pod's, a Job's) is read
+/// by more people than the Secret the URL comes from.
+pub fn redacted_url(url: &str) -> String {
+    match (url.find("://"), url.rfind('@')) {
+        (Some(scheme), Some(at)) if at > scheme => {
+            let user_part = &url[scheme + 3..at];
+            let user = user_part.split(':').next().unwrap_or("");
+            format!("{}{user}:***{}", &url[..scheme + 3], &url[at..])
+        }
+        _ => url.to_string(),
+    }
+}
+
 impl Storage {
     /// Opens the database at `url` and applies the migrations: `sqlite://FILE` (made if
     /// missing; WAL mode, foreign keys on) or `postgres://USER@HOST/DB`.
@@ -152,7 +165,7 @@ impl Storage {
     pub async fn open(url: &str) -> Result<Storage> {
         sqlx::any::install_default_drivers();
         let bad_url = |source: sqlx::Error| StorageError::Url {
-            url: url.to_string(),
+            url: redacted_url(url),
             source,
         };
         let backend = Backend::of_url(url).ok_or_else(|| {
@@ -309,6 +322,19 @@ impl Storage {
     pub async fn ping(&self) -> Result<()> {
         sqlx::query("select 1").execute(&self.pool).await?;
         Ok(())
+    }
+
+    /// The schema's version (the latest migration applied) and how many migrations
+    /// are applied.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn schema_version(&self) -> Result<(i64, i64)> {
+        Ok(sqlx::query_as(
+            "select coalesce(max(version), 0), count(*) from _sqlx_migrations where success",
+        )
+        .fetch_one(&self.pool)
+        .await?)
     }
 
     /// Closes the pool, waiting for connections to be returned.
@@ -484,6 +510,23 @@ mod tests {
         for other in &schemas[1..] {
             assert_eq!(&schemas[0], other);
         }
+    }
+}
+
+#[cfg(test)]
+mod url_tests {
+    use super::redacted_url;
+
+    #[test]
+    fn a_password_never_reaches_the_log() {
+        assert_eq!(
+            redacted_url("postgres://maze:s3cret@db.example:5432/arena"),
+            "postgres://maze:***@db.example:5432/arena"
+        );
+        assert_eq!(
+            redacted_url("sqlite:///var/db.sqlite"),
+            "sqlite:///var/db.sqlite"
+        );
     }
 }
 
