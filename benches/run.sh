@@ -17,10 +17,10 @@ cd "$(dirname "$0")/.."
 QUICK=${1:-}
 if [ "$QUICK" = --quick ]; then
   RUNS=3 STEP_RUNS=3 PAGE_SIZES="1000" PAGE_RUNS=5 EVERY=17 T_RUNS=1 OVERHEAD=5
-  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1 WORKER_ARGS=(1 2) IDLE_ARGS=(1 2) CLAIM_RUNS=20
+  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1 WORKER_ARGS=(1 2) IDLE_ARGS=(1 2) CLAIM_RUNS=20 KIT_ARGS=(1 5)
 else
   RUNS=5 STEP_RUNS=11 PAGE_SIZES="1000 100000 1000000" PAGE_RUNS=21 EVERY=1 T_RUNS=3 OVERHEAD=20
-  HTTP_ARGS=() ADAPTER_RUNS=11 WORKER_ARGS=(3 12) IDLE_ARGS=(3 5) CLAIM_RUNS=200
+  HTTP_ARGS=() ADAPTER_RUNS=11 WORKER_ARGS=(3 12) IDLE_ARGS=(3 5) CLAIM_RUNS=200 KIT_ARGS=(3 40)
 fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
@@ -97,6 +97,9 @@ log "the original tester's way against the adapter"
 
 log "tournaments"
 { bash benches/tournament.sh "$T_RUNS"; echo; } >>"$out"
+
+log "matches a minute per core, by language"
+{ bash benches/kits.sh "${KIT_ARGS[@]}"; echo; } >>"$out"
 
 log "throughput across worker processes on PostgreSQL"
 { bash benches/workers.sh "${WORKER_ARGS[@]}"; echo; } >>"$out"

@@ -6,7 +6,9 @@
 # matches per minute from the tournament's creation to its last record, the settings
 # taken in turn RUNS times (medians). Then the claim itself, timed in the database:
 # PostgreSQL's own statistics (pg_stat_statements) give the mean time of the claim
-# statement over every claim of the runs.
+# statement over every claim of the runs; and what PostgreSQL sees of a match (claims,
+# writing statements, rows written, WAL and database bytes), per match and a second at
+# the best rate measured.
 #
 #   bash benches/workers.sh [RUNS] [REPEATS]     (default 3 and 12: 108 matches a run)
 # Starts a throw-away PostgreSQL cluster with .ci/postgres.sh (root: as user postgres).
@@ -81,6 +83,10 @@ PY
   echo "$(( (b - a) / 1000000 )) $total"
 }
 
+# What PostgreSQL sees of the matches: counters from here to the end of the runs.
+psql -qtA "$db" -c "select pg_stat_statements_reset()" >/dev/null
+before=$(psql -qtA "$db" -c "select tup_inserted + tup_updated + tup_deleted, pg_current_wal_lsn(),
+  pg_database_size('bench') from pg_stat_database where datname = 'bench'")
 declare -A WALL
 for ((i = 1; i <= RUNS; i++)); do
   for k in 1 2 3; do
@@ -90,9 +96,15 @@ for ((i = 1; i <= RUNS; i++)); do
     MATCHES=$n
   done
 done
-claim=$(psql -qtA "$db" -c "select calls, round(mean_exec_time::numeric, 3), round(max_exec_time::numeric, 3)
+claim=$(psql -qtA "$db" -c "select calls, round(mean_exec_time::numeric, 3), round(max_exec_time::numeric, 3), rows
   from pg_stat_statements where query ilike '%for update of m skip locked%'
   order by calls desc limit 1")
+IFS='|' read -r rows0 lsn0 size0 <<<"$before"
+load=$(psql -qtA "$db" -c "select
+  (select sum(calls) from pg_stat_statements where query ~* '^\s*(insert|update|delete)'),
+  (select tup_inserted + tup_updated + tup_deleted - $rows0 from pg_stat_database where datname = 'bench'),
+  pg_wal_lsn_diff(pg_current_wal_lsn(), '$lsn0'),
+  pg_database_size('bench') - $size0")
 
 echo "## Throughput across worker processes (PostgreSQL)"
 echo
@@ -103,7 +115,7 @@ echo "the full sandbox; from the tournament's creation to its last record; media
 echo "rounds, the settings taken in turn. The machine has $(nproc) cores: a third worker shares"
 echo "them with the other two (its matches still run one at a time on a core of their own)."
 echo
-python3 - "$MATCHES" "${WALL[1]}" "${WALL[2]}" "${WALL[3]}" "$claim" <<'PY'
+python3 - "$MATCHES" "${WALL[1]}" "${WALL[2]}" "${WALL[3]}" "$claim" "$load" "$RUNS" <<'PY'
 import statistics, sys
 n = int(sys.argv[1])
 walls = [statistics.median(map(int, a.split())) for a in sys.argv[2:5]]
@@ -111,9 +123,26 @@ print("| workers | wall | matches per minute | × one worker |")
 print("|---:|---:|---:|---:|")
 for k, w in enumerate(walls, 1):
     print(f"| {k} | {w / 1000:.1f} s | {n * 60000 / w:.0f} | {walls[0] / w:.2f} |")
-calls, mean, top = (sys.argv[5].split("|") + ["?", "?", "?"])[:3]
+calls, mean, top, claimed = (sys.argv[5].split("|") + ["?"] * 4)[:4]
 print()
 print(f"The claim, timed by PostgreSQL (pg_stat_statements): {calls} claims, mean {mean} ms, "
       f"longest {top} ms (the claim statement alone: one `UPDATE ... WHERE match_id = "
       f"(SELECT ... FOR UPDATE SKIP LOCKED)`).")
+writes, rows, wal, size = (float(x) for x in sys.argv[6].split("|"))
+played = n * 3 * int(sys.argv[7])
+best = max(n * 60 / (w / 1000) for w in walls) / 60  # matches a second, the best setting
+per = lambda x: x / played
+print()
+print(f"What PostgreSQL sees of a match ({played} matches in all the rounds; counters of "
+      f"pg_stat_statements and pg_stat_database over the runs), and the same at the best rate "
+      f"measured here ({best:.1f} matches a second):")
+print()
+print("| per match | measure | a second at the best rate |")
+print("|---|---:|---:|")
+print(f"| claim statements (idle workers' empty claims included) | {per(float(calls)):.2f} | {per(float(calls)) * best:.1f} |")
+print(f"| claims that took a match | {per(float(claimed)):.2f} | {per(float(claimed)) * best:.1f} |")
+print(f"| writing statements (insert, update, delete) | {per(writes):.1f} | {per(writes) * best:.0f} |")
+print(f"| rows written | {per(rows):.1f} | {per(rows) * best:.0f} |")
+print(f"| WAL bytes | {per(wal):,.0f} | {per(wal) * best / 1024:,.0f} KiB |")
+print(f"| database bytes (tables and indexes) | {per(size):,.0f} | {per(size) * best / 1024:,.0f} KiB |")
 PY
