@@ -30,7 +30,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${1:-target/debug/mazearena}
-CONTAINERS=(mazearena mazearena-api mazearena-worker-1 mazearena-worker-2 mazearena-k8s-worker)
+CONTAINERS=(mazearena mazearena-api mazearena-worker-1 mazearena-worker-2 mazearena-k8s-worker mazearena-k8s-api)
 VOLUMES=(mazearena-db mazearena-bots)
 SCALE_DB=mazearena_image_scale
 ours=
@@ -296,3 +296,18 @@ podman logs mazearena-k8s-worker 2>&1 | grep -q "mazearena worker stopped" || fa
 [ "$stopped_ms" -lt $((grace * 1000)) ] || fail "the Kubernetes worker took ${stopped_ms} ms to stop (grace ${grace} s)"
 say "the Kubernetes worker's pod played 6 matches alone, each as on the host (sandbox full), and stopped in ${stopped_ms} ms ($(($(date +%s) - started)) s)"
 podman stop mazearena-api >/dev/null
+
+# The API server's pod (deploy/kubernetes/api.yaml) the same way: read-only root, no
+# capability, no_new_privs, its emptyDirs; it starts, answers, and takes an upload (checked
+# in its data folder) on the same database.
+aopts=$(python3 .ci/kube_podman.py deploy/kubernetes/api.yaml) || fail "kube_podman: $aopts"
+eval "podman run -d --name mazearena-k8s-api --network host --no-healthcheck $aopts \
+  -e MAZEARENA_BIND=127.0.0.1:8082 -e MAZEARENA_DATABASE=\"\$MAZEARENA_DATABASE\" \
+  -e MAZEARENA_ADMIN_TOKEN=\"\$MAZEARENA_ADMIN_TOKEN\" localhost/mazearena:latest serve --jobs 0" >/dev/null 2>"$STEP_LOG" ||
+  fail "podman run of the Kubernetes API server: $(cat "$STEP_LOG")"
+api=http://127.0.0.1:8082
+answer_of curl -sf "$api/healthz" >/dev/null
+upload py-k8s "python3 simple_bot.py" bots/python simple_bot.py mazebot.py >/dev/null || fail "an upload to the Kubernetes API server's pod"
+podman stop mazearena-k8s-api >/dev/null
+podman logs mazearena-k8s-api 2>&1 | grep -q "API only" || fail "the Kubernetes API server's pod: $(podman logs mazearena-k8s-api 2>&1 | tail -3)"
+say "the Kubernetes API server's pod answers and takes an upload"

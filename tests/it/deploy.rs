@@ -164,12 +164,39 @@ fn the_manifests_run_this_release_with_flags_and_variables_it_has() {
         }
     }
     assert!(checked >= 10, "only {checked} variables checked");
-    // The placeholders cannot run: the API server refuses a token that short.
-    let placeholder = secret["stringData"]["admin-token"].as_str().unwrap();
-    assert!(
-        placeholder.len() < 16,
-        "the admin token's placeholder must be refused"
-    );
+    // The placeholders cannot run: the API server refuses tokens that short, and the
+    // database's host is in `.invalid`, which never resolves.
+    for key in ["database-url", "scaler-database-url"] {
+        let url = secret["stringData"][key].as_str().unwrap();
+        assert!(url.contains(".invalid:"), "{key}: {url}");
+    }
+    for key in ["admin-token", "metrics-token"] {
+        let tmp = tempfile::tempdir().unwrap();
+        let placeholder = secret["stringData"][key].as_str().unwrap();
+        let mut serve = Command::new(env!("CARGO_BIN_EXE_mazearena"));
+        serve
+            .args(["serve", "--jobs", "0", "--bind", "127.0.0.1:0"])
+            .arg("--database")
+            .arg(format!("sqlite://{}", tmp.path().join("db").display()))
+            .arg("--data-dir")
+            .arg(tmp.path().join("data"))
+            .env(
+                "MAZEARENA_ADMIN_TOKEN",
+                "a-real-admin-token-of-32-characters",
+            )
+            .stdout(Stdio::null());
+        if key == "admin-token" {
+            serve.env("MAZEARENA_ADMIN_TOKEN", placeholder);
+        } else {
+            serve.env("MAZEARENA_METRICS_TOKEN", placeholder);
+        }
+        let out = serve.output().unwrap();
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && said.contains("too short"),
+            "the placeholder {key} was taken: {said}"
+        );
+    }
     let scaler = object("TriggerAuthentication", "mazearena-scaler");
     let key = scaler["spec"]["secretTargetRef"][0]["key"]
         .as_str()
@@ -616,4 +643,39 @@ async fn a_worker_stopped_for_a_scale_in_finishes_or_gives_back_its_matches_with
     let (status, _) = terminate(&mut child);
     assert!(status.success());
     db.close().await;
+}
+
+/// docs/DEPLOY.md's capacity plan is the one BENCHMARKS.md's figures give, each figure
+/// named by its section and row, and the scaler's target is the plan's.
+#[test]
+fn the_capacity_plan_is_benchmarks_md_s() {
+    let out = Command::new("python3")
+        .arg(root().join("benches/capacity.py"))
+        .arg("--check")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc = std::fs::read_to_string(root().join("docs/DEPLOY.md")).unwrap();
+    let plan = doc.split("<!-- capacity:begin -->").nth(1).unwrap();
+    let cited = plan
+        .lines()
+        .filter(|l| l.starts_with("| ") && l.contains("*: "))
+        .count();
+    assert!(
+        cited >= 9,
+        "only {cited} figures name their BENCHMARKS.md row"
+    );
+    for entrants in ["100", "1,000", "10,000"] {
+        for lang in ["Python", "C", "Java"] {
+            assert!(
+                plan.contains(&format!("| {entrants} | {lang} |")),
+                "no row for {entrants} entrants' {lang} bots"
+            );
+        }
+    }
 }
