@@ -278,8 +278,9 @@ say "the scale profile passed in $(($(date +%s) - started)) s"
 # worker alone plays a second tournament, every match as on the host, and stops cleanly
 # on SIGTERM within the pod's terminationGracePeriodSeconds.
 started=$(date +%s)
-python3 -c 'import yaml' 2>/dev/null || python3 -m pip install -q pyyaml
-kopts=$(python3 .ci/kube_podman.py deploy/kubernetes/worker.yaml) || fail "kube_podman: $kopts"
+python3 -c 'import yaml' 2>/dev/null || python3 -m pip install -q pyyaml 2>/dev/null ||
+  { apt-get update -qq && apt-get install -y -qq python3-yaml; }
+kopts=$(python3 .ci/kube_podman.py deploy/kubernetes/worker.yaml 2>&1) || fail "$kopts"
 say "the Kubernetes worker's pod as podman options: $kopts"
 eval "podman run -d --name mazearena-k8s-worker --network host --no-healthcheck $kopts \
   -e MAZEARENA_DATABASE=\"\$MAZEARENA_DATABASE\" localhost/mazearena:latest worker" >/dev/null 2>"$STEP_LOG" ||
@@ -300,7 +301,7 @@ podman stop mazearena-api >/dev/null
 # The API server's pod (deploy/kubernetes/api.yaml) the same way: read-only root, no
 # capability, no_new_privs, its emptyDirs; it starts, answers, and takes an upload (checked
 # in its data folder) on the same database.
-aopts=$(python3 .ci/kube_podman.py deploy/kubernetes/api.yaml) || fail "kube_podman: $aopts"
+aopts=$(python3 .ci/kube_podman.py deploy/kubernetes/api.yaml 2>&1) || fail "$aopts"
 eval "podman run -d --name mazearena-k8s-api --network host --no-healthcheck $aopts \
   -e MAZEARENA_BIND=127.0.0.1:8082 -e MAZEARENA_DATABASE=\"\$MAZEARENA_DATABASE\" \
   -e MAZEARENA_ADMIN_TOKEN=\"\$MAZEARENA_ADMIN_TOKEN\" localhost/mazearena:latest serve --jobs 0" >/dev/null 2>"$STEP_LOG" ||

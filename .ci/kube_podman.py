@@ -34,7 +34,7 @@ def options(deployment):
     pod = deployment["spec"]["template"]["spec"]
     container = pod["containers"][0]
     out = []
-    user = group = None
+    user = group = non_root = None
     for key, value in pod.items():
         if key == "hostUsers":
             if value is False:
@@ -53,8 +53,7 @@ def options(deployment):
             elif key == "runAsGroup":
                 group = value
             elif key == "runAsNonRoot":
-                if value and user == 0:
-                    fail("runAsNonRoot with runAsUser 0")
+                non_root = value
             elif key == "fsGroup":
                 out += ["--group-add", str(value)]
             elif key == "seccompProfile":
@@ -92,6 +91,8 @@ def options(deployment):
                 fail(f"the security context's {key} is not reproduced")
     if user is None:
         fail("no runAsUser")
+    if non_root and user == 0:
+        fail("runAsNonRoot with runAsUser 0")
     out += ["--user", f"{user}:{group if group is not None else user}"]
     limits = container.get("resources", {}).get("limits", {})
     if "memory" in limits:

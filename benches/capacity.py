@@ -136,7 +136,7 @@ def plan(figures, jobs):
     )
     sqlite_bytes = figures.cite(
         "bytes per stored match (SQLite file)",
-        figures.text("Bytes per stored match", r"= (\d+) B per match\s*$"),
+        figures.text("Bytes per stored match", r"(?m)= (\d+) B per match$"),
         "Bytes per stored match",
         "file bytes per match",
     )
@@ -174,8 +174,7 @@ def plan(figures, jobs):
                     "sqlite_gib": stored * sqlite_bytes / 2**30,
                 }
             )
-    slowest = min(per_core.values())
-    target = math.floor(slowest / 2 * jobs)  # matches its slots play in 30 s
+    target = 30 * jobs  # the scaler's work is in seconds of a slot: 30 s a slot
     return rows, target, public, private
 
 
@@ -212,7 +211,8 @@ def render(figures, rows, target, public, private, jobs):
         say(f"| {what} | {shown} | *{section}*: {row} |")
     say("")
     say(
-        f"The plan, for workers of {jobs} slots (`MAZEARENA_JOBS` in worker.yaml, a core each), "
+        f"The plan, for workers of {jobs} slot{'s' if jobs != 1 else ''} (`MAZEARENA_JOBS` in "
+        f"worker.yaml, a core each), "
         f"if every entrant's bot were written in the language of the row. A version is ranked "
         f"after {public:.0f} public matches and its validation match; the rush is every entrant "
         f"submitting {RUSH_VERSIONS_PER_HOUR} versions in the last hour, kept at "
@@ -238,9 +238,9 @@ def render(figures, rows, target, public, private, jobs):
         )
     say("")
     say(
-        f"The scaler's `targetQueryValue` (worker-scaler.yaml): the matches one worker's {jobs} "
-        f"slots play in 30 seconds with the slowest kit's bots: **{target}**; its "
-        f"`maxReplicaCount`, the most workers above: **{most_workers(rows)}**."
+        f"The scaler (worker-scaler.yaml): `targetQueryValue`, 30 seconds of work for each of "
+        f"a worker's {jobs} slot{'s' if jobs != 1 else ''}: **{target}**; `maxReplicaCount`, the most workers "
+        f"above: **{most_workers(rows)}**."
     )
     return "\n".join(out)
 

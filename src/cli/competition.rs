@@ -288,9 +288,12 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
 
 async fn open(db: &DatabaseArg, create: bool) -> anyhow::Result<Storage> {
     if create {
-        Storage::open(&db.database)
-            .await
-            .with_context(|| format!("cannot open the database {}", db.database))
+        Storage::open(&db.database).await.with_context(|| {
+            format!(
+                "cannot open the database {}",
+                crate::storage::redacted_url(&db.database)
+            )
+        })
     } else {
         super::open_existing(&db.database).await
     }

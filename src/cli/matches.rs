@@ -54,10 +54,13 @@ pub fn run(cmd: MatchCommand) -> anyhow::Result<()> {
 
 async fn show(args: ShowArgs) -> anyhow::Result<()> {
     let storage = super::open_existing(&args.database).await?;
-    let row = storage
-        .get_match(args.id)
-        .await?
-        .with_context(|| format!("no match {} in {}", args.id, args.database))?;
+    let row = storage.get_match(args.id).await?.with_context(|| {
+        format!(
+            "no match {} in {}",
+            args.id,
+            crate::storage::redacted_url(&args.database)
+        )
+    })?;
     let maze_row = storage.get_maze(row.maze_id).await?;
     let (bot_name, maze_name) = (row.bot_name.clone(), row.maze_name.clone());
     if row.record.is_none() && args.json {

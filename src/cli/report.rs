@@ -59,7 +59,7 @@ pub(super) fn print_failures(results: &[MatchResult], database: &str) {
     let db = if database == "sqlite://mazearena.db" {
         String::new()
     } else {
-        format!(" --database {database}")
+        format!(" --database {}", crate::storage::redacted_url(database))
     };
     let mut bots: Vec<&str> = results.iter().map(|r| r.bot.as_str()).collect();
     bots.dedup();

@@ -162,24 +162,37 @@ const FAIR_ORDER: &str = "
     where m.status = 'queued'
     order by coalesce(c.served, 0), h.class, coalesce(l.served, 0), h.match_id";
 
-/// The work for match workers, in matches, for an autoscaler of workers: the queued
-/// matches a worker may claim now (the condition of [`Storage::claim_next`]: the version
-/// is built and ready, the bot is not paused), the matches being played, and the versions
-/// waiting for or in their build (a build, and the validation match after it, takes a
-/// worker's slot like a match). Queued matches that cannot be claimed (a paused bot, a
-/// version still building) are not counted: more workers would not play them sooner.
+/// The work waiting for match workers, in seconds of a worker slot, for an autoscaler of
+/// workers: the pieces of work (the queued matches a worker may claim now, the condition
+/// of [`Storage::claim_next`]: the version is built and ready, the bot is not paused; the
+/// matches being played; the versions waiting for or in their build) times the mean time
+/// of the last 200 matches played (start to record; 1 s while none is known, at least
+/// 0.1 s), rounded up. Queued matches that cannot be claimed (a paused bot, a version
+/// still building) are not counted: more workers would not play them sooner. In seconds
+/// rather than matches, so that a field of slow bots (each match up to the time bank)
+/// asks for more workers than the same number of quick matches.
 ///
 /// KEDA's PostgreSQL scaler runs exactly this statement
 /// (`deploy/kubernetes/worker-scaler.yaml`; a test checks that the two are the same and
-/// runs the manifest's copy on PostgreSQL). Each count is an index seek (`match_status`,
-/// `bot_version_build`): it stays cheap on a database of millions of finished matches.
-pub const WORK_FOR_WORKERS: &str = "select
-  (select count(*) from match m
-     join bot_version v on v.bot_version_id = m.bot_version_id
-     join bot b on b.bot_id = v.bot_id
-   where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready')
-  + (select count(*) from match where status = 'running')
-  + (select count(*) from bot_version where build_status = 'building')";
+/// runs the manifest's copy on PostgreSQL). Its counts are index seeks (`match_status`,
+/// `bot_version_build`) and the mean reads the newest 200 rows by primary key: it stays
+/// cheap on a database of millions of finished matches. Integer arithmetic only, so both
+/// backends give the same number.
+pub const WORK_FOR_WORKERS: &str = "with recent as (
+  select coalesce(cast(sum(finished_at - started_at) as bigint) / count(*), 1000) as ms
+  from (select finished_at, started_at from match
+        where finished_at is not null and started_at is not null
+        order by match_id desc limit 200) last_played
+), pieces as (
+  select
+    (select count(*) from match m
+       join bot_version v on v.bot_version_id = m.bot_version_id
+       join bot b on b.bot_id = v.bot_id
+     where m.status = 'queued' and b.paused_at is null and v.build_status = 'ready')
+    + (select count(*) from match where status = 'running')
+    + (select count(*) from bot_version where build_status = 'building') as n
+)
+select (n * (case when ms < 100 then 100 else ms end) + 999) / 1000 from pieces, recent";
 
 /// Bot `b` has the same owner as bot `$1`: the same entrant, or (for bots of no
 /// entrant) the same owner token.
@@ -472,8 +485,8 @@ impl Storage {
         Ok(Ok(match_id))
     }
 
-    /// The work waiting for match workers now, as [`WORK_FOR_WORKERS`] counts it (the
-    /// number an autoscaler of workers reads).
+    /// The work waiting for match workers now, in seconds of a worker slot, as
+    /// [`WORK_FOR_WORKERS`] counts it (the number an autoscaler of workers reads).
     ///
     /// # Errors
     /// Database failures.
@@ -991,8 +1004,9 @@ mod tests {
         .unwrap()
     }
 
-    /// The scaler's count: claimable queued matches, running ones and builds; never the
-    /// matches of a paused bot or of a version still building, nor finished ones.
+    /// The scaler's count: claimable queued matches, running ones and builds, times the
+    /// mean time of the matches played last; never the matches of a paused bot or of a
+    /// version still building, nor finished ones.
     #[tokio::test]
     async fn the_work_for_workers_counts_what_a_worker_could_take() {
         for (db, _guard) in backends().await {
@@ -1001,6 +1015,7 @@ mod tests {
             for seed in 0..3 {
                 db.queue_match(v, z, seed).await.unwrap();
             }
+            // No match played yet: 1 s each.
             assert_eq!(db.work_for_workers().await.unwrap(), 3, "three queued");
             let claimed = db.claim_next("w", 60_000, None).await.unwrap().unwrap();
             assert_eq!(
@@ -1023,18 +1038,24 @@ mod tests {
             )
             .await
             .unwrap();
-            assert_eq!(db.work_for_workers().await.unwrap(), 2, "one finished");
+            // The match played took 5 s: two left, 10 s.
+            db.run_sql_for_tests(&format!(
+                "update match set started_at = 1000, finished_at = 6000 where match_id = {}",
+                claimed.match_id
+            ))
+            .await;
+            assert_eq!(db.work_for_workers().await.unwrap(), 10, "one finished");
             // A paused bot's queued matches wait for nothing a worker can do.
             let paused = db
                 .create_bot("p", "h2", &crate::storage::test_support::plain_version())
                 .await
                 .unwrap();
             db.queue_match(paused.bot_version_id, z, 0).await.unwrap();
-            assert_eq!(db.work_for_workers().await.unwrap(), 3);
+            assert_eq!(db.work_for_workers().await.unwrap(), 15);
             db.pause_bot(paused.bot_id, "test").await.unwrap();
             assert_eq!(
                 db.work_for_workers().await.unwrap(),
-                2,
+                10,
                 "paused: not counted"
             );
             // A version waiting for its build is one piece of work, its matches none yet.
@@ -1045,8 +1066,19 @@ mod tests {
             db.queue_match(built.bot_version_id, z, 0).await.unwrap();
             assert_eq!(
                 db.work_for_workers().await.unwrap(),
-                3,
+                15,
                 "the build, not its match"
+            );
+            // Quick matches count at least 0.1 s each, rounded up to whole seconds.
+            db.run_sql_for_tests(&format!(
+                "update match set finished_at = 1001 where match_id = {}",
+                claimed.match_id
+            ))
+            .await;
+            assert_eq!(
+                db.work_for_workers().await.unwrap(),
+                1,
+                "3 x 0.1 s, rounded up"
             );
         }
     }

@@ -145,14 +145,25 @@ pub struct Storage {
 /// A database `url` without its password, for messages: a log (a pod's, a Job's) is read
 /// by more people than the Secret the URL comes from.
 pub fn redacted_url(url: &str) -> String {
-    match (url.find("://"), url.rfind('@')) {
-        (Some(scheme), Some(at)) if at > scheme => {
-            let user_part = &url[scheme + 3..at];
-            let user = user_part.split(':').next().unwrap_or("");
-            format!("{}{user}:***{}", &url[..scheme + 3], &url[at..])
-        }
+    let mut out = match (url.find("://"), url.rfind('@')) {
+        (Some(scheme), Some(at)) if at > scheme => match url[scheme + 3..at].split_once(':') {
+            Some((user, _)) => format!("{}{user}:***{}", &url[..scheme + 3], &url[at..]),
+            None => url.to_string(),
+        },
         _ => url.to_string(),
+    };
+    // A password given as a parameter: `?password=...` or `&password=...`.
+    if let Some((base, query)) = out.split_once('?') {
+        let query: Vec<String> = query
+            .split('&')
+            .map(|pair| match pair.split_once('=') {
+                Some((key, _)) if key.eq_ignore_ascii_case("password") => format!("{key}=***"),
+                _ => pair.to_string(),
+            })
+            .collect();
+        out = format!("{base}?{}", query.join("&"));
     }
+    out
 }
 
 impl Storage {
@@ -526,6 +537,15 @@ mod url_tests {
         assert_eq!(
             redacted_url("sqlite:///var/db.sqlite"),
             "sqlite:///var/db.sqlite"
+        );
+        assert_eq!(
+            redacted_url("postgres://maze@db/arena"),
+            "postgres://maze@db/arena",
+            "no password: nothing to hide"
+        );
+        assert_eq!(
+            redacted_url("postgres://db/arena?user=maze&password=s3cret&sslmode=require"),
+            "postgres://db/arena?user=maze&password=***&sslmode=require"
         );
     }
 }
