@@ -278,6 +278,14 @@ fn the_worker_pod_gives_the_sandbox_what_it_needs_and_nothing_more() {
         pod_grace >= grace + 10,
         "{pod_grace} s for a {grace} s grace"
     );
+    // The API servers pause before SIGTERM (so that no proxy still sends them requests),
+    // well within their grace.
+    let api = object("Deployment", "mazearena-api");
+    let api_pod = &api["spec"]["template"]["spec"];
+    let pause = api_pod["containers"][0]["lifecycle"]["preStop"]["sleep"]["seconds"]
+        .as_u64()
+        .unwrap();
+    assert!(pause >= 1 && pause + 10 <= api_pod["terminationGracePeriodSeconds"].as_u64().unwrap());
     // Every other pod meets the `restricted` Pod Security level.
     for (name, pod) in pods() {
         if name == "mazearena-worker" {
