@@ -18,6 +18,10 @@ import tempfile
 import yaml
 
 
+# The profiles a pod may lift, and podman's name for each.
+PROFILES = {"seccompProfile": "seccomp", "appArmorProfile": "apparmor"}
+
+
 def fail(message):
     sys.exit(f"kube_podman: {message}")
 
@@ -56,18 +60,12 @@ def options(deployment):
                 non_root = value
             elif key == "fsGroup":
                 out += ["--group-add", str(value)]
-            elif key == "seccompProfile":
+            elif key in PROFILES:
                 kind = value["type"]
                 if kind == "Unconfined":
-                    out += ["--security-opt", "seccomp=unconfined"]
+                    out += ["--security-opt", f"{PROFILES[key]}=unconfined"]
                 elif kind != "RuntimeDefault":
-                    fail(f"seccompProfile {kind}")
-            elif key == "appArmorProfile":
-                kind = value["type"]
-                if kind == "Unconfined":
-                    out += ["--security-opt", "apparmor=unconfined"]
-                elif kind != "RuntimeDefault":
-                    fail(f"appArmorProfile {kind}")
+                    fail(f"{key} {kind}")
             elif key == "procMount":
                 if value == "Unmasked":
                     out += ["--security-opt", "unmask=ALL"]

@@ -288,12 +288,7 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
 
 async fn open(db: &DatabaseArg, create: bool) -> anyhow::Result<Storage> {
     if create {
-        Storage::open(&db.database).await.with_context(|| {
-            format!(
-                "cannot open the database {}",
-                crate::storage::redacted_url(&db.database)
-            )
-        })
+        super::open_database(&db.database).await
     } else {
         super::open_existing(&db.database).await
     }

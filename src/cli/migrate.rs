@@ -6,8 +6,6 @@
 use anyhow::Context;
 use clap::Args;
 
-use crate::storage::Storage;
-
 /// Settings of `mazearena migrate`.
 #[derive(Debug, Args)]
 pub struct MigrateArgs {
@@ -24,12 +22,7 @@ pub struct MigrateArgs {
 pub fn run(args: MigrateArgs) -> anyhow::Result<()> {
     let runtime = tokio::runtime::Runtime::new().context("cannot start the async runtime")?;
     runtime.block_on(async {
-        let storage = Storage::open(&args.database).await.with_context(|| {
-            format!(
-                "cannot open or migrate the database {}",
-                crate::storage::redacted_url(&args.database)
-            )
-        })?;
+        let storage = super::open_database(&args.database).await?;
         let (version, count) = storage.schema_version().await?;
         storage.close().await;
         println!(

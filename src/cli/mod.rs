@@ -177,6 +177,12 @@ pub(crate) async fn open_existing(url: &str) -> anyhow::Result<crate::storage::S
             "no database at {file} (give --database, or set MAZEARENA_DATABASE)"
         );
     }
+    open_database(url).await
+}
+
+/// Opens the database at `url` (made and migrated if need be), saying which one when it
+/// cannot, without its password.
+pub(crate) async fn open_database(url: &str) -> anyhow::Result<crate::storage::Storage> {
     crate::storage::Storage::open(url).await.with_context(|| {
         format!(
             "cannot open the database {}",

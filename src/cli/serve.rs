@@ -255,12 +255,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     };
     let storage = args
         .pool
-        .storage(Storage::open(&args.database).await.with_context(|| {
-            format!(
-                "cannot open the database {}",
-                crate::storage::redacted_url(&args.database)
-            )
-        })?);
+        .storage(super::open_database(&args.database).await?);
     // PostgreSQL may restart while the server starts: the start-up work (all of it safe
     // to do twice) is tried again for as long as the connection itself would be.
     match storage.backend() {

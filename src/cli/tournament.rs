@@ -19,7 +19,6 @@ use crate::registry::{
     cache::{BundleCache, DEFAULT_CACHE_BYTES},
 };
 use crate::runner::{self, Limits};
-use crate::storage::Storage;
 use crate::storage::leaderboard::Scope;
 use crate::worker::{self, Shutdown, WorkerConfig};
 
@@ -146,12 +145,7 @@ async fn play(
     sandbox: runner::Sandbox,
     maze_files: Vec<PathBuf>,
 ) -> anyhow::Result<()> {
-    let storage = Storage::open(&args.database).await.with_context(|| {
-        format!(
-            "cannot open the database {}",
-            crate::storage::redacted_url(&args.database)
-        )
-    })?;
+    let storage = super::open_database(&args.database).await?;
     storage.requeue_expired().await?;
     let mut version_ids = Vec::new();
     for b in &bots {

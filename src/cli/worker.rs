@@ -12,7 +12,6 @@ use tokio::sync::Notify;
 use tokio_util::task::TaskTracker;
 
 use super::serve::{PoolArgs, finish, hidden_paths, wait_for_signal};
-use crate::storage::Storage;
 use crate::worker::{self, Shutdown};
 
 /// Settings of `mazearena worker`; every flag can also come from its `MAZEARENA_*` variable.
@@ -50,12 +49,7 @@ async fn work(args: WorkerArgs) -> anyhow::Result<()> {
         .context("refusing to play matches without the sandbox")?;
     let storage = args
         .pool
-        .storage(Storage::open(&args.database).await.with_context(|| {
-            format!(
-                "cannot open the database {}",
-                crate::storage::redacted_url(&args.database)
-            )
-        })?);
+        .storage(super::open_database(&args.database).await?);
     let jobs = args.pool.jobs(1);
     let level = sandbox.level();
     let shutdown = Shutdown::default();

@@ -87,12 +87,19 @@ fn env_value(container: &Value, name: &str) -> Option<String> {
 }
 
 fn help(subcommand: &str) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_mazearena"))
-        .args([subcommand, "--help"])
-        .output()
-        .unwrap();
+    let out = crate::support::mazearena(&[subcommand, "--help"]);
     assert!(out.status.success(), "mazearena {subcommand} --help");
     String::from_utf8(out.stdout).unwrap()
+}
+
+/// A container's arguments (the subcommand first).
+fn args_of(container: &Value) -> Vec<&str> {
+    container["args"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap())
+        .collect()
 }
 
 #[test]
@@ -113,10 +120,7 @@ fn the_manifests_run_this_release_with_flags_and_variables_it_has() {
     assert_eq!(images.len(), 1);
     assert_eq!(images[0]["name"], "mazearena");
     assert_eq!(images[0]["newTag"], version, "the image tag is the release");
-    let out = Command::new(env!("CARGO_BIN_EXE_mazearena"))
-        .arg("--version")
-        .output()
-        .unwrap();
+    let out = crate::support::mazearena(&["--version"]);
     assert_eq!(
         String::from_utf8(out.stdout).unwrap().trim(),
         format!("mazearena {version}")
@@ -132,12 +136,7 @@ fn the_manifests_run_this_release_with_flags_and_variables_it_has() {
     for (name, pod) in pods() {
         for c in pod["containers"].as_array().unwrap() {
             assert_eq!(c["image"], "mazearena", "{name}: the image kustomize names");
-            let args: Vec<&str> = c["args"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|a| a.as_str().unwrap())
-                .collect();
+            let args = args_of(c);
             let text = help(args[0]);
             for flag in args[1..].iter().filter(|a| a.starts_with("--")) {
                 assert!(
@@ -471,44 +470,27 @@ async fn the_scalers_query_is_the_storages_and_counts_on_postgresql_as_a_read_on
     db.close().await;
 }
 
-/// Waits until match `id` has `status` (from the database); on failure, says what the
-/// worker logged in `log`.
-async fn wait_status(
+/// Waits until match `id`'s status (from the database) is one `wanted` takes, described
+/// as `what`; on failure, says what the worker logged in `log`.
+async fn wait_until(
     db: &mazearena::storage::Storage,
     id: i64,
-    status: &str,
+    wanted: impl Fn(&str) -> bool,
+    what: &str,
     within: Duration,
     log: &std::path::Path,
 ) {
     let deadline = Instant::now() + within;
     loop {
         let row = db.get_match(id).await.unwrap().unwrap();
-        if row.status == status {
+        if wanted(row.status.as_str()) {
             return;
         }
         assert!(
             Instant::now() < deadline,
-            "match {id} is {}, not {status}; the worker's log:\n{}",
+            "match {id} is {}, not {what}; the worker's log:\n{}",
             row.status,
             std::fs::read_to_string(log).unwrap_or_default()
-        );
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
-}
-
-/// Waits until match `id` has ended (any final status but `aborted`).
-async fn wait_final(db: &mazearena::storage::Storage, id: i64, within: Duration) {
-    let deadline = Instant::now() + within;
-    loop {
-        let row = db.get_match(id).await.unwrap().unwrap();
-        if crate::support::FINAL.contains(&row.status.as_str()) {
-            assert_ne!(row.status, "aborted", "match {id}");
-            return;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "match {id} is still {}",
-            row.status
         );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
@@ -539,14 +521,8 @@ fn start_worker(
     log: &std::path::Path,
 ) -> std::process::Child {
     let out = std::fs::File::create(log).unwrap();
-    let args: Vec<&str> = container["args"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|a| a.as_str().unwrap())
-        .collect();
     Command::new(env!("CARGO_BIN_EXE_mazearena"))
-        .args(&args)
+        .args(args_of(container))
         .envs(literal_env(container))
         .env("MAZEARENA_DATABASE", database)
         .env("MAZEARENA_DATA_DIR", data)
@@ -599,12 +575,7 @@ async fn a_worker_stopped_for_a_scale_in_finishes_or_gives_back_its_matches_with
     // The API server with the API pod's arguments and variables.
     let api = object("Deployment", "mazearena-api");
     let api = &api["spec"]["template"]["spec"]["containers"][0];
-    let api_args: Vec<&str> = api["args"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|a| a.as_str().unwrap())
-        .collect();
+    let api_args = args_of(api);
     assert_eq!(api_args[0], "serve");
     let api_env = literal_env(api);
     let api_env: Vec<(&str, &str)> = api_env
@@ -637,13 +608,22 @@ async fn a_worker_stopped_for_a_scale_in_finishes_or_gives_back_its_matches_with
     // A match that ends within the grace is finished, and nothing new is claimed.
     let log = tmp.path().join("worker-1.log");
     let mut child = start_worker(container, &database, &data, &log);
-    wait_status(&db, first, "running", Duration::from_secs(60), &log).await;
+    wait_until(
+        &db,
+        first,
+        |s| s == "running",
+        "running",
+        Duration::from_secs(60),
+        &log,
+    )
+    .await;
     let (status, took) = terminate(&mut child);
     let text = std::fs::read_to_string(&log).unwrap();
     assert!(status.success(), "{status:?}\n{text}");
     assert!(took < grace, "{took:?}\n{text}");
     assert!(text.contains("mazearena worker stopped"), "{text}");
-    wait_final(&db, first, Duration::ZERO).await;
+    let ended = |s: &str| crate::support::FINAL.contains(&s) && s != "aborted";
+    wait_until(&db, first, ended, "ended", Duration::ZERO, &log).await;
     let row = db.get_match(second).await.unwrap().unwrap();
     assert_eq!(
         (row.status.as_str(), row.attempts),
@@ -656,7 +636,15 @@ async fn a_worker_stopped_for_a_scale_in_finishes_or_gives_back_its_matches_with
     let long = crate::support::queue(&server, slow, maze, 1, &slow_token).await;
     let log = tmp.path().join("worker-2.log");
     let mut child = start_worker(container, &database, &data, &log);
-    wait_status(&db, long, "running", Duration::from_secs(60), &log).await;
+    wait_until(
+        &db,
+        long,
+        |s| s == "running",
+        "running",
+        Duration::from_secs(60),
+        &log,
+    )
+    .await;
     let (status, took) = terminate(&mut child);
     let text = std::fs::read_to_string(&log).unwrap();
     assert!(status.success(), "{status:?}\n{text}");
@@ -673,7 +661,15 @@ async fn a_worker_stopped_for_a_scale_in_finishes_or_gives_back_its_matches_with
     // Another worker takes it at once, not after the lease runs out.
     let log = tmp.path().join("worker-3.log");
     let mut child = start_worker(container, &database, &data, &log);
-    wait_status(&db, long, "running", Duration::from_secs(10), &log).await;
+    wait_until(
+        &db,
+        long,
+        |s| s == "running",
+        "running",
+        Duration::from_secs(10),
+        &log,
+    )
+    .await;
     let (status, _) = terminate(&mut child);
     assert!(status.success());
     db.close().await;

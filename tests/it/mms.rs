@@ -439,6 +439,20 @@ fn community_style_mice_take_their_mms_paths_in_run_0() {
     }
 }
 
+/// The mouse's lines and the referee's answers in `text` (`mouse: LINE  [referee: ]ANSWER`),
+/// as a recording of the relay fixture and docs/PROTOCOL-mms.md show them.
+fn exchange_lines(text: &str) -> Vec<(String, String)> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("mouse: "))
+        .filter_map(|l| {
+            let (line, rest) = l.split_once("  ")?;
+            let answer = rest.trim();
+            let answer = answer.strip_prefix("referee: ").unwrap_or(answer);
+            Some((line.trim().to_string(), answer.to_string()))
+        })
+        .collect()
+}
+
 #[test]
 fn a_mouse_that_exits_at_the_goal_is_told_how_to_get_its_second_run() {
     let record = run_mouse("tests/fixtures/bots/mms/stop_at_goal.py --exit", 1, &[]);
@@ -460,20 +474,16 @@ fn the_protocols_doc_shows_a_real_exchange_and_the_kits_real_scores() {
         .and_then(|s| s.split("```text").nth(1))
         .and_then(|s| s.split("```").next())
         .expect("the doc's exchange");
-    let shown: Vec<(String, String)> = block
-        .lines()
-        .filter_map(|l| l.strip_prefix("mouse: "))
-        .filter_map(|l| {
-            let (line, rest) = l.split_once("  ")?;
-            let answer = rest.trim();
-            let answer = answer.strip_prefix("referee: ").unwrap_or(answer);
-            // A move's answer comes after its step: shown on a line of its own.
+    // A move's answer comes after its step: the doc shows the step (`-> ...`) there.
+    let shown: Vec<(String, String)> = exchange_lines(block)
+        .into_iter()
+        .map(|(line, answer)| {
             let answer = if answer.starts_with("->") {
-                "ack"
+                "ack".to_string()
             } else {
                 answer
             };
-            Some((line.trim().to_string(), answer.to_string()))
+            (line, answer)
         })
         .collect();
     assert!(shown.len() > 10, "{shown:?}");
@@ -484,16 +494,7 @@ fn the_protocols_doc_shows_a_real_exchange_and_the_kits_real_scores() {
     );
     assert_eq!(record["status"], "finished", "{record}");
     let log = record["stderr_tail"].as_str().unwrap();
-    let real: Vec<(String, String)> = log
-        .lines()
-        .filter_map(|l| l.strip_prefix("mouse: "))
-        .filter_map(|l| {
-            let (line, rest) = l.split_once("  ")?;
-            let answer = rest.trim();
-            let answer = answer.strip_prefix("referee: ").unwrap_or(answer);
-            Some((line.trim().to_string(), answer.to_string()))
-        })
-        .collect();
+    let real = exchange_lines(log);
     // Each shown exchange is the real one, in the same order (the doc leaves some out).
     let mut at = 0;
     for (line, answer) in &shown {
