@@ -2,7 +2,9 @@
 //! one client address, served by hyper (HTTP/1) with a deadline for each request's head (which
 //! also closes a kept-alive connection left idle that long), and finished gracefully on
 //! shutdown. A client over a cap is closed at once, without a byte read; the body of a
-//! request and its handling are bounded by the request timeout of [`super::app`].
+//! request and its handling are bounded by the request timeout of [`super::app`]. A
+//! trusted reverse proxy ([`super::client_address`]) is held to the total cap only: its
+//! connections carry many clients, each of them known by the address it forwards.
 
 use std::collections::HashMap;
 use std::future::Future;
@@ -18,6 +20,8 @@ use hyper_util::service::TowerToHyperService;
 use tokio::net::TcpListener;
 use tokio::sync::{OwnedSemaphorePermit, Semaphore};
 use tower::ServiceExt;
+
+use super::client_address::{ClientAddress, TrustedProxies};
 
 /// Bounds on the server's connections.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -130,6 +134,7 @@ pub async fn serve(
     listener: TcpListener,
     app: Router,
     limits: ConnectionLimits,
+    trusted: Arc<TrustedProxies>,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let total = Arc::new(Semaphore::new(limits.max_connections));
@@ -165,18 +170,29 @@ pub async fn serve(
             tracing::debug!(%remote, "connection refused: the server's connection cap is reached");
             continue;
         };
-        let Some(held) = per_address.take(remote.ip(), limits.max_per_address, permit) else {
+        // A trusted proxy carries many clients on its connections: it is held to the
+        // total cap only.
+        let most = if trusted.trusts(remote.ip()) {
+            limits.max_connections
+        } else {
+            limits.max_per_address
+        };
+        let Some(held) = per_address.take(remote.ip(), most, permit) else {
             tracing::debug!(%remote, "connection refused: its address's connection cap is reached");
             continue;
         };
         let _ = stream.set_nodelay(true);
-        // Each request carries its client's address (`ConnectInfo`), for the limits
-        // that count per address.
+        // Each request carries its peer (`ConnectInfo`) and its client's address
+        // (`ClientAddress`: behind a trusted proxy, the one it forwards), for the
+        // budgets that count per address.
+        let trusted = trusted.clone();
         let service = TowerToHyperService::new(app.clone().map_request(
             move |req: axum::http::Request<hyper::body::Incoming>| {
                 let mut req = req.map(Body::new);
+                let client = trusted.client(remote.ip(), req.headers());
                 req.extensions_mut()
                     .insert(axum::extract::ConnectInfo(remote));
+                req.extensions_mut().insert(ClientAddress(client));
                 req
             },
         ));

@@ -178,7 +178,7 @@ pub(crate) fn registration_name(r: &Registration) -> &'static str {
 async fn create_entrant(
     State(state): State<AppState>,
     caller: Caller,
-    client: Option<axum::Extension<axum::extract::ConnectInfo<std::net::SocketAddr>>>,
+    client: Option<axum::Extension<super::client_address::ClientAddress>>,
     AppJson(body): AppJson<EntrantRequest>,
 ) -> ApiResult<(StatusCode, axum::Json<EntrantCreated>)> {
     let created = register(&state, &caller, client.map(|c| c.0.0), body).await?;
@@ -193,10 +193,9 @@ async fn create_entrant(
 pub(crate) async fn register(
     state: &AppState,
     caller: &Caller,
-    client: Option<std::net::SocketAddr>,
+    client: Option<std::net::IpAddr>,
     body: EntrantRequest,
 ) -> ApiResult<EntrantCreated> {
-    super::check_registration_rate(state, caller, client)?;
     crate::registry::bots::check_name(&body.name)
         .map_err(|e| ApiError::Unprocessable(e.to_string().replace("bot name", "entrant name")))?;
     if body.members.len() > MAX_MEMBERS
@@ -210,20 +209,40 @@ pub(crate) async fn register(
             "members: at most {MAX_MEMBERS} names of 1 to {MAX_MEMBER_CHARS} characters, no control characters"
         )));
     }
+    // The admin has no limit; the right invite code spends the code's budget, a wrong
+    // one its address's budget of guesses, an open registration its address's budget
+    // of anonymous registrations (`api::limits`).
     if !caller.is_admin() {
+        use super::limits::{Spend, spend};
         match state.storage.registration().await? {
-            Registration::Open => {}
+            Registration::Open => {
+                if !caller.can_organise() {
+                    spend(state, Spend::AnonymousRegistration, client).await?;
+                }
+            }
             Registration::Closed => {
                 return Err(ApiError::Forbidden(
                     "registration is closed: the admin registers entrants".into(),
                 ));
             }
             Registration::Invite(hash) => {
-                if body.invite_code.as_deref().map(hash_token) != Some(hash) {
+                let raw = body.invite_code.as_deref().unwrap_or("");
+                let given = raw.trim();
+                if given.is_empty() {
                     return Err(ApiError::Forbidden(
                         "registration is by invite: give the invite code (`invite_code`)".into(),
                     ));
                 }
+                // A code pasted with a space around it is still the code.
+                if hash_token(given) != hash && hash_token(raw) != hash {
+                    spend(state, Spend::WrongInviteCode, client).await?;
+                    return Err(ApiError::Forbidden(
+                        "this invite code is not the one for this server: check it with your \
+                         organiser (`invite_code`)"
+                            .into(),
+                    ));
+                }
+                spend(state, Spend::InviteRegistration(&hash), client).await?;
             }
         }
     }

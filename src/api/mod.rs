@@ -8,11 +8,13 @@
 
 pub mod auth;
 pub mod bots;
+pub mod client_address;
 pub mod competitions;
 pub mod connections;
 pub mod entrants;
 pub mod error;
 pub mod leaderboard;
+pub mod limits;
 pub mod lists;
 pub mod matches;
 pub mod mazes;
@@ -71,55 +73,13 @@ pub struct Settings {
     /// The most bytes of stored match records one owner may have before its new matches
     /// are refused (`None`: no cap; the admin: no cap).
     pub max_stored_bytes_per_owner: Option<i64>,
-    /// Bots registered per hour from one client address, anonymous registrations only
-    /// (`None`: no limit).
-    pub registrations: Option<Arc<RegistrationLimiter>>,
-    /// Login attempts per hour from one client address (`None`: no limit).
-    pub logins: Option<Arc<RegistrationLimiter>>,
+    /// The budgets of what proves nothing (wrong keys and codes, anonymous
+    /// registrations), per client address ([`limits`]).
+    pub budgets: limits::Budgets,
+    /// The owners' quotas on uploads ([`crate::registry::owners`]).
+    pub owner_quotas: crate::registry::owners::OwnerQuotas,
     /// Whether the server is reached over HTTPS: session cookies are then `Secure`.
     pub secure_cookies: bool,
-}
-
-/// Registrations per client address: a keyed GCRA limiter (`governor`), in this
-/// server's memory.
-pub type RegistrationLimiter = governor::DefaultKeyedRateLimiter<std::net::IpAddr>;
-
-/// Refuses a registration (of a bot or an entrant) by anyone but the admin past the
-/// limit of its client address `client` (429 with Retry-After): a registration is free,
-/// and each gives a new token.
-///
-/// # Errors
-/// The limit is reached.
-pub(crate) fn check_registration_rate(
-    state: &AppState,
-    caller: &auth::Caller,
-    client: Option<std::net::SocketAddr>,
-) -> error::ApiResult<()> {
-    let (Some(limiter), false, Some(addr)) =
-        (&state.settings.registrations, caller.is_admin(), client)
-    else {
-        return Ok(());
-    };
-    limiter.check_key(&addr.ip()).map_err(|not_until| {
-        use governor::clock::Clock;
-        let wait = not_until.wait_time_from(governor::clock::DefaultClock::default().now());
-        error::ApiError::TooManyRequests {
-            message: format!(
-                "{} has registered as much as it may this hour; try again in {} s",
-                addr.ip(),
-                wait.as_secs() + 1
-            ),
-            retry_after_secs: wait.as_secs() + 1,
-        }
-    })
-}
-
-/// A limiter of `per_hour` registrations per address (`None` for 0: no limit).
-pub fn registration_limiter(per_hour: u32) -> Option<Arc<RegistrationLimiter>> {
-    let n = std::num::NonZeroU32::new(per_hour)?;
-    Some(Arc::new(governor::RateLimiter::keyed(
-        governor::Quota::per_hour(n),
-    )))
 }
 
 impl Settings {
@@ -282,8 +242,9 @@ async fn security_headers(mut response: axum::response::Response) -> axum::respo
     response
 }
 
-/// Serves the API on `listener` within `limits` ([`connections`]) until `shutdown`
-/// completes, then finishes the requests in flight.
+/// Serves the API on `listener` within `limits` ([`connections`]), believing the
+/// forwarding headers of the `trusted` proxies only ([`client_address`]), until
+/// `shutdown` completes, then finishes the requests in flight.
 ///
 /// # Errors
 /// When the listener fails.
@@ -291,7 +252,8 @@ pub async fn serve(
     listener: TcpListener,
     state: AppState,
     limits: connections::ConnectionLimits,
+    trusted: client_address::TrustedProxies,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
-    connections::serve(listener, app(state), limits, shutdown).await
+    connections::serve(listener, app(state), limits, Arc::new(trusted), shutdown).await
 }

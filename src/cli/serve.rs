@@ -76,14 +76,48 @@ pub struct ServeArgs {
     #[arg(long, env = "MAZEARENA_MAX_QUEUED_PER_OWNER", default_value_t = 50,
           value_parser = clap::value_parser!(i64).range(1..))]
     max_queued_per_owner: i64,
-    /// Bots that may be registered per hour from one client address without the admin
-    /// token (0: no limit); more are refused with 429 and Retry-After.
+    /// Bots and entrants that may be registered without any key per hour from one client
+    /// address, on a server whose registration is open (0: no limit); more are refused
+    /// with 429 and Retry-After. A registration with an entrant's key, an organiser's
+    /// or the invite code spends nothing of it.
     #[arg(long, env = "MAZEARENA_REGISTRATIONS_PER_HOUR", default_value_t = 20)]
     registrations_per_hour: u32,
-    /// Logins (`/login`, right or wrong) that may be tried per hour from one client
-    /// address (0: no limit); more are refused with 429 and Retry-After.
+    /// Wrong tries per hour from one client address: keys that are not known at
+    /// `/login` and wrong invite codes (0: no limit); more are refused with 429. A right
+    /// key or code is never refused and spends nothing.
     #[arg(long, env = "MAZEARENA_LOGINS_PER_HOUR", default_value_t = 60)]
     logins_per_hour: u32,
+    /// Entrants that may register with the right invite code per hour, everyone
+    /// together (0: no limit): a code that leaks cannot fill the database.
+    #[arg(
+        long,
+        env = "MAZEARENA_INVITE_REGISTRATIONS_PER_HOUR",
+        default_value_t = 600
+    )]
+    invite_registrations_per_hour: u32,
+    /// Versions of bots entered in no competition that one owner (an entrant, or the
+    /// owner token of a bot of no entrant) may upload in any 24 hours, a new bot
+    /// included; failed builds and invalid versions do not count (0: no limit). A
+    /// competition's bots have its quota instead.
+    #[arg(long, env = "MAZEARENA_VERSIONS_PER_DAY", default_value_t = 20)]
+    versions_per_day: u32,
+    /// Versions of one owner that may wait for their build (and validation match) at
+    /// once; another upload is refused with 429 naming them (0: no limit).
+    #[arg(long, env = "MAZEARENA_PENDING_BUILDS_PER_OWNER", default_value_t = 3)]
+    pending_builds_per_owner: u32,
+    /// Minutes of building and validation matches one owner's versions may take in any
+    /// 24 hours, failed and invalid ones included; past them uploads are refused with
+    /// 429 until the oldest leaves the window (0: no limit).
+    #[arg(long, env = "MAZEARENA_BUILD_MINUTES_PER_DAY", default_value_t = 60)]
+    build_minutes_per_day: u32,
+    /// Reverse proxies whose forwarding header gives the client's address (addresses
+    /// or networks, separated by commas: `127.0.0.1,10.0.0.0/8`). From anyone else the
+    /// header is ignored. Behind a proxy, list it, or every client has its address.
+    #[arg(long, env = "MAZEARENA_TRUSTED_PROXIES", default_value = "")]
+    trusted_proxies: String,
+    /// The header the trusted proxies write the client's address in.
+    #[arg(long, env = "MAZEARENA_PROXY_HEADER", value_enum, default_value_t = api::client_address::ProxyHeader::XForwardedFor)]
+    proxy_header: api::client_address::ProxyHeader,
     /// The server is reached over HTTPS (directly or through a proxy): session cookies
     /// are marked `Secure`. (A proxy's `X-Forwarded-Proto: https` also does it.)
     #[arg(long, env = "MAZEARENA_SECURE_COOKIES")]
@@ -229,6 +263,9 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
 const API_ONLY: &str = "unused";
 
 async fn serve(args: ServeArgs) -> anyhow::Result<()> {
+    let trusted =
+        api::client_address::TrustedProxies::parse(&args.trusted_proxies, args.proxy_header)
+            .map_err(|e| anyhow::anyhow!("--trusted-proxies: {e}"))?;
     std::fs::create_dir_all(&args.data_dir).with_context(|| {
         format!(
             "cannot create the data directory {}",
@@ -294,8 +331,16 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
             max_queued_per_owner: args.max_queued_per_owner,
             max_stored_bytes_per_owner: (args.max_stored_mib_per_owner > 0.0)
                 .then_some((args.max_stored_mib_per_owner * 1_048_576.0) as i64),
-            registrations: api::registration_limiter(args.registrations_per_hour),
-            logins: api::registration_limiter(args.logins_per_hour),
+            budgets: api::limits::Budgets {
+                guesses_per_hour: args.logins_per_hour,
+                anonymous_registrations_per_hour: args.registrations_per_hour,
+                invite_registrations_per_hour: args.invite_registrations_per_hour,
+            },
+            owner_quotas: crate::registry::owners::OwnerQuotas {
+                versions_per_day: args.versions_per_day,
+                pending_builds: args.pending_builds_per_owner,
+                build_minutes_per_day: args.build_minutes_per_day,
+            },
             secure_cookies: args.secure_cookies,
         }),
         metrics: metrics.clone(),
@@ -346,14 +391,23 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     };
     tracker.close();
 
-    if args.prune_practice_after_days > 0 {
+    {
+        // Every hour: the budgets whose tries have all come back are removed, and the
+        // traces of old practice matches when the server prunes them.
         let storage = storage.clone();
         let days = i64::from(args.prune_practice_after_days);
         tokio::spawn(async move {
             let mut hourly = tokio::time::interval(Duration::from_secs(3600));
             loop {
                 hourly.tick().await;
-                let before = crate::storage::now_ms() - days * super::prune::DAY_MS;
+                let now = crate::storage::now_ms();
+                if let Err(e) = storage.prune_budgets(now).await {
+                    tracing::warn!(error = %e, "cannot remove spent budgets");
+                }
+                if days == 0 {
+                    continue;
+                }
+                let before = now - days * super::prune::DAY_MS;
                 match storage.prune_practice_records(before).await {
                     Ok((0, _)) => {}
                     Ok((count, bytes)) => {
@@ -418,7 +472,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         head_timeout: Duration::from_secs(args.head_timeout_secs),
     }
     .fitted_to_descriptors();
-    api::serve(listener, state, limits, async move {
+    api::serve(listener, state, limits, trusted, async move {
         http_stop.cancelled().await
     })
     .await

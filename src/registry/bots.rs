@@ -11,6 +11,7 @@ use crate::manifest::BotManifest;
 use crate::runner::botenv;
 use crate::storage::Storage;
 use crate::storage::bots::{BotVersionRow, NewVersion, VersionQuota, VersionRefusal};
+use crate::storage::owners::OwnerLimits;
 
 /// Longest bot name.
 pub const MAX_NAME_CHARS: usize = 64;
@@ -99,17 +100,21 @@ pub fn check_submission(s: &Submission) -> Result<()> {
     botenv::check(&s.env).map_err(|e| RegistryError::Invalid(format!("env: {e}")))
 }
 
-/// Registers a bot named `name` with its first version; its files are stored as a
+/// Registers a bot named `name` with its first version, the bot of `entrant` if given
+/// and held by `owner`'s quotas if given ([`super::owners`]); its files are stored as a
 /// bundle (`scratch`: a local folder to unpack in).
 ///
 /// # Errors
 /// [`RegistryError::Invalid`] (name, command, environment), [`RegistryError::Conflict`]
-/// (the name is taken), [`RegistryError::Bundle`] (the files), the database.
+/// (the name is taken), [`RegistryError::Bundle`] (the files), [`RegistryError::Quota`]
+/// (the owner's), the database.
 pub async fn register(
     storage: &Storage,
     name: &str,
     mut submission: Submission,
     scratch: &Path,
+    entrant: Option<i64>,
+    owner: Option<&OwnerLimits>,
 ) -> Result<Registered> {
     check_name(name)?;
     check_submission(&submission)?;
@@ -119,13 +124,19 @@ pub async fn register(
     let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
     let summary = store_upload(storage, files, scratch).await?;
     let owner_token = new_token()?;
-    let version = storage
-        .create_bot(
+    let version = match storage
+        .create_bot_within(
             name,
             &hash_token(&owner_token),
+            entrant,
             &stored_version(&submission, &summary),
+            owner,
         )
-        .await?;
+        .await?
+    {
+        Ok(row) => row,
+        Err(refused) => return Err(version_refusal(storage, refused, owner).await?),
+    };
     Ok(Registered {
         version,
         owner_token,
@@ -142,6 +153,7 @@ pub async fn add_version(
     mut submission: Submission,
     scratch: &Path,
     quotas: &[VersionQuota],
+    owner: Option<&OwnerLimits>,
 ) -> Result<BotVersionRow> {
     check_submission(&submission)?;
     if storage.get_bot(bot_id).await?.is_none() {
@@ -150,19 +162,39 @@ pub async fn add_version(
     let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
     let summary = store_upload(storage, files, scratch).await?;
     match storage
-        .add_bot_version_within(bot_id, &stored_version(&submission, &summary), quotas)
+        .add_bot_version_within(
+            bot_id,
+            &stored_version(&submission, &summary),
+            quotas,
+            owner,
+        )
         .await?
     {
         Ok(row) => Ok(row),
-        Err(VersionRefusal::Quota(full)) => {
-            let now = crate::storage::now_ms();
-            Err(super::competitions::quota_refusal(storage, full, now).await?)
+        Err(refused) => Err(version_refusal(storage, refused, owner).await?),
+    }
+}
+
+/// What a version that `refused` stored nothing says.
+async fn version_refusal(
+    storage: &Storage,
+    refused: VersionRefusal,
+    owner: Option<&OwnerLimits>,
+) -> Result<RegistryError> {
+    let now = crate::storage::now_ms();
+    Ok(match refused {
+        VersionRefusal::Quota(full) => {
+            super::competitions::quota_refusal(storage, full, now).await?
         }
-        Err(VersionRefusal::Closed { name, closes_at }) => Err(RegistryError::Conflict(format!(
+        VersionRefusal::Owner(kind, usage) => match owner {
+            Some(limits) => super::owners::refusal(kind, &usage, limits, now),
+            None => RegistryError::Internal("an owner's quota without its limits".into()),
+        },
+        VersionRefusal::Closed { name, closes_at } => RegistryError::Conflict(format!(
             "competition {name} closed at {}: no new versions",
             crate::competition::Timestamp(closes_at).words()
-        ))),
-    }
+        )),
+    })
 }
 
 /// Finds or registers a bot from a local folder (a `bot.toml`), which plays from that
@@ -289,6 +321,8 @@ mod tests {
             "up",
             submission(&[("bot.py", "print(1)\n")]),
             scratch.path(),
+            None,
+            None,
         )
         .await
         .unwrap();
@@ -367,24 +401,33 @@ mod tests {
                 },
             ),
         ] {
-            let err = register(&db, name, s, scratch.path()).await.unwrap_err();
+            let err = register(&db, name, s, scratch.path(), None, None)
+                .await
+                .unwrap_err();
             assert!(matches!(err, RegistryError::Invalid(_)), "{name}: {err}");
         }
-        let err = register(&db, "e", submission(&[("../x", "1")]), scratch.path())
-            .await
-            .unwrap_err();
+        let err = register(
+            &db,
+            "e",
+            submission(&[("../x", "1")]),
+            scratch.path(),
+            None,
+            None,
+        )
+        .await
+        .unwrap_err();
         assert!(matches!(err, RegistryError::Bundle(_)), "{err}");
         assert_eq!(db.bundle_totals().await.unwrap().0, 0);
         assert!(db.list_bots().await.unwrap().is_empty());
 
-        register(&db, "f", ok.clone(), scratch.path())
+        register(&db, "f", ok.clone(), scratch.path(), None, None)
             .await
             .unwrap();
-        let err = register(&db, "f", ok.clone(), scratch.path())
+        let err = register(&db, "f", ok.clone(), scratch.path(), None, None)
             .await
             .unwrap_err();
         assert!(matches!(err, RegistryError::Conflict(_)), "{err}");
-        let err = add_version(&db, 999, ok, scratch.path(), &[])
+        let err = add_version(&db, 999, ok, scratch.path(), &[], None)
             .await
             .unwrap_err();
         assert!(matches!(err, RegistryError::NotFound(_)), "{err}");

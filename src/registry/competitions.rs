@@ -1363,13 +1363,13 @@ mod tests {
             // Checked while open (no refusal), then the close passes before it is stored.
             let checked = check_upload(&db, v.bot_id, now).await.unwrap().unwrap();
             let stored = db
-                .add_bot_version_within(v.bot_id, &plain_version(), &checked)
+                .add_bot_version_within(v.bot_id, &plain_version(), &checked, None)
                 .await
                 .unwrap();
             assert!(stored.is_ok(), "{stored:?}");
             close_now(&db, c, now).await;
             let late = db
-                .add_bot_version_within(v.bot_id, &plain_version(), &checked)
+                .add_bot_version_within(v.bot_id, &plain_version(), &checked, None)
                 .await
                 .unwrap();
             assert!(

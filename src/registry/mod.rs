@@ -26,6 +26,7 @@ pub mod cache;
 pub mod competitions;
 pub mod mazes;
 pub mod migrate;
+pub mod owners;
 pub mod rankings;
 pub mod tokens;
 

@@ -5,6 +5,7 @@
 use sqlx::FromRow;
 
 use super::matches::failure_record;
+use super::owners::{self, OwnerLimits, OwnerQuotaKind, OwnerUsage};
 use super::{Result, Storage, StorageError, is_unique_violation, now_ms};
 use crate::runner::outcome::MatchStatus;
 
@@ -80,6 +81,9 @@ pub struct BotVersionRow {
     /// `mms` for a mouse of the mms simulator; `None` for protocol v1.
     #[sqlx(default)]
     pub protocol: Option<String>,
+    /// How long its build and validation match took (ms), once they ended.
+    #[sqlx(default)]
+    pub build_ms: Option<i64>,
 }
 
 impl BotVersionRow {
@@ -189,6 +193,50 @@ impl Storage {
         Ok(row)
     }
 
+    /// Registers a bot as [`Storage::create_bot`] does, the bot of `entrant` if given,
+    /// unless `owner`'s quotas are used up (counted in the same transaction under the
+    /// owner's lock): then nothing is written and the refusal is returned.
+    ///
+    /// # Errors
+    /// [`StorageError::Conflict`] when the name is taken; database failures.
+    pub async fn create_bot_within(
+        &self,
+        name: &str,
+        owner_token_hash: &str,
+        entrant: Option<i64>,
+        first: &NewVersion<'_>,
+        owner: Option<&OwnerLimits>,
+    ) -> Result<std::result::Result<BotVersionRow, VersionRefusal>> {
+        let mut tx = self.begin_write().await?;
+        if let Some(limits) = owner
+            && let Some((kind, usage)) = owners::hold_in(&mut tx, self.backend(), limits).await?
+        {
+            tx.rollback().await?;
+            return Ok(Err(VersionRefusal::Owner(kind, usage)));
+        }
+        let now = now_ms();
+        let bot_id: i64 = sqlx::query_scalar(
+            "insert into bot (name, owner_token_hash, created_at, entrant_id)
+             values ($1, $2, $3, $4) returning bot_id",
+        )
+        .bind(name)
+        .bind(owner_token_hash)
+        .bind(now)
+        .bind(entrant)
+        .fetch_one(&mut *tx)
+        .await
+        .map_err(|e| {
+            if is_unique_violation(&e) {
+                StorageError::Conflict(format!("a bot named {name:?} exists already"))
+            } else {
+                e.into()
+            }
+        })?;
+        let row = insert_version(&mut tx, bot_id, first).await?;
+        tx.commit().await?;
+        Ok(Ok(row))
+    }
+
     /// Adds a new version to a bot, and resumes the bot if it was paused (the new
     /// version has no aborted matches).
     ///
@@ -224,11 +272,18 @@ impl Storage {
         bot_id: i64,
         new: &NewVersion<'_>,
         quotas: &[VersionQuota],
+        owner: Option<&OwnerLimits>,
     ) -> Result<std::result::Result<BotVersionRow, VersionRefusal>> {
         let mut quotas = quotas.to_vec();
         // One order for the locks, so two uploads never wait for each other.
         quotas.sort_by_key(|q| (q.entrant_id, q.competition_id));
         let mut tx = self.begin_write().await?;
+        if let Some(limits) = owner
+            && let Some((kind, usage)) = owners::hold_in(&mut tx, self.backend(), limits).await?
+        {
+            tx.rollback().await?;
+            return Ok(Err(VersionRefusal::Owner(kind, usage)));
+        }
         for q in &quotas {
             sqlx::query("update entrant set created_at = created_at where entrant_id = $1")
                 .bind(q.entrant_id)
@@ -450,6 +505,8 @@ pub struct VersionQuota {
 pub enum VersionRefusal {
     /// The quota is used up.
     Quota(VersionQuota),
+    /// One of the owner's quotas is used up (what it had used).
+    Owner(OwnerQuotaKind, OwnerUsage),
     /// A competition the bot is entered in closed (its name and close, unix ms) before
     /// the version could be stored.
     Closed {

@@ -11,6 +11,7 @@
 //! statements that must differ ask [`Storage::backend`].
 
 pub mod bots;
+pub mod budgets;
 pub mod builds;
 pub mod bundles;
 pub mod competitions;
@@ -18,6 +19,7 @@ pub mod entrants;
 pub mod leaderboard;
 pub mod matches;
 pub mod mazes;
+pub mod owners;
 pub mod records;
 pub mod rejudges;
 pub mod retries;

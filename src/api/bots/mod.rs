@@ -17,6 +17,7 @@ use super::error::{ApiError, ApiResult, AppPath, ErrorBody};
 use super::{AppState, MAX_UPLOAD_BYTES};
 use crate::registry;
 use crate::storage::bots::BotVersionRow;
+use crate::storage::owners::Owner;
 use upload::{Upload, read_upload};
 
 pub use crate::registry::bots::{MAX_COMMAND_CHARS, MAX_NAME_CHARS};
@@ -227,10 +228,7 @@ async fn create_bot(
     caller: Caller,
     request: Request,
 ) -> ApiResult<(StatusCode, axum::Json<BotCreated>)> {
-    let client = request
-        .extensions()
-        .get::<axum::extract::ConnectInfo<std::net::SocketAddr>>()
-        .map(|c| c.0);
+    let client = super::client_address::of_request(&request);
     let upload = read_upload(&state, request).await?;
     let created = register_bot(&state, &caller, client, upload).await?;
     Ok((StatusCode::CREATED, axum::Json(created)))
@@ -244,12 +242,12 @@ async fn create_bot(
 pub(crate) async fn register_bot(
     state: &AppState,
     caller: &Caller,
-    client: Option<std::net::SocketAddr>,
+    client: Option<std::net::IpAddr>,
     upload: Upload,
 ) -> ApiResult<BotCreated> {
-    super::check_registration_rate(state, caller, client)?;
-    // With an entrant's key the bot is the entrant's; without one, only an open server
-    // takes it.
+    // With an entrant's key the bot is the entrant's, held by the entrant's quotas;
+    // without one, only an open server takes it, on its address's budget
+    // (`api::limits`). The admin and the organisers have neither.
     let entrant = match caller {
         Caller::Token(hash) => state.storage.entrant_by_key(hash).await?,
         _ => None,
@@ -263,19 +261,38 @@ pub(crate) async fn register_bot(
                     .into(),
             ));
         }
+        if !caller.can_organise() {
+            super::limits::spend(state, super::limits::Spend::AnonymousRegistration, client)
+                .await?;
+        }
+    }
+    // An entrant's new bot is held by the entrant's quotas (its first version is one of
+    // a bot outside competitions); checked before the files are unpacked, and again where
+    // the bot is stored.
+    let now = crate::storage::now_ms();
+    let owner = match (&entrant, caller.is_admin()) {
+        (Some(e), false) => Some(state.settings.owner_quotas.limits(
+            Owner::Entrant(e.entrant_id),
+            true,
+            now,
+        )),
+        _ => None,
+    };
+    if let Some(limits) = &owner {
+        registry::owners::check(&state.storage, limits, now).await?;
     }
     let (name, submission) = upload.submission()?;
     check_runtime(state, submission.runtime.as_deref())?;
     let name = name.ok_or_else(|| ApiError::Unprocessable("a bot needs a `name`".into()))?;
-    let registered =
-        registry::bots::register(&state.storage, &name, submission, &state.settings.scratch())
-            .await?;
-    if let Some(e) = &entrant {
-        state
-            .storage
-            .set_bot_entrant(registered.version.bot_id, e.entrant_id)
-            .await?;
-    }
+    let registered = registry::bots::register(
+        &state.storage,
+        &name,
+        submission,
+        &state.settings.scratch(),
+        entrant.as_ref().map(|e| e.entrant_id),
+        owner.as_ref(),
+    )
+    .await?;
     state.wake.notify_waiters();
     let row = registered.version;
     let token = registered.owner_token;
@@ -344,6 +361,25 @@ pub(crate) async fn add_bot_version(
             });
         }
     };
+    // The owner's own quotas (builds waiting, build time, and for a bot in no
+    // competition its daily versions); the admin has none.
+    let owner = if caller.is_admin() {
+        None
+    } else {
+        let outside = state
+            .storage
+            .competitions_of_bot(id)
+            .await?
+            .iter()
+            .all(|c| c.kind != "competition");
+        match state.storage.owner_of_bot(id).await? {
+            Some(o) => Some(state.settings.owner_quotas.limits(o, outside, now)),
+            None => None,
+        }
+    };
+    if let Some(limits) = &owner {
+        registry::owners::check(&state.storage, limits, now).await?;
+    }
     let (_, submission) = upload.submission()?;
     check_runtime(state, submission.runtime.as_deref())?;
     // The quotas are counted again where the version is added: uploads sent at once
@@ -354,6 +390,7 @@ pub(crate) async fn add_bot_version(
         submission,
         &state.settings.scratch(),
         &quotas,
+        owner.as_ref(),
     )
     .await?;
     state.wake.notify_waiters();

@@ -13,6 +13,7 @@ use super::super::AppState;
 use super::super::auth::{Caller, hash_token};
 use super::super::bots::upload::{Upload, checked};
 use super::super::error::{ApiError, AppPath};
+use super::super::limits;
 use super::super::session::{self, Visitor};
 use super::forms::{
     PageError, PageResult, client_of, local_next, login_first, read_form, see_other,
@@ -55,25 +56,16 @@ pub(super) async fn login(
     let form: LoginForm = read_form(&state, request).await?;
     let next = local_next(form.next.as_deref());
     let again = |message: &str| account::login(Some(message), &next);
-    // Guessing is limited per address, like registration (right or wrong tries alike).
-    if let (Some(limiter), Some(addr)) = (&state.settings.logins, client)
-        && let Err(not_until) = limiter.check_key(&addr.ip())
-    {
-        use governor::clock::Clock;
-        let wait = not_until.wait_time_from(governor::clock::DefaultClock::default().now());
-        return Err(PageError::from(ApiError::TooManyRequests {
-            message: format!(
-                "{} has tried to log in as often as it may this hour; try again in {} s",
-                addr.ip(),
-                wait.as_secs() + 1
-            ),
-            retry_after_secs: wait.as_secs() + 1,
-        })
-        .with_page(again));
-    }
+    // A right key always logs in; a key nobody holds spends its address's budget of
+    // guesses (api::limits), and past it is refused with 429 rather than 401.
     let key = form.key.trim();
     let key_hash = hash_token(key);
     if key.is_empty() || !session::known_key(&state, &key_hash).await? {
+        if !key.is_empty() {
+            limits::spend(&state, limits::Spend::WrongKey, client)
+                .await
+                .map_err(|e| PageError::from(e).with_page(again))?;
+        }
         return Err(PageError::new(
             StatusCode::UNAUTHORIZED,
             "this key is not known on this server: check that you pasted all of it",

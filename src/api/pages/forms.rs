@@ -1,7 +1,7 @@
 //! What the pages' forms share: errors answered as pages (never JSON), redirects, the
 //! client's address, and reading a urlencoded form into a struct.
 
-use axum::extract::{ConnectInfo, FromRequest, Multipart, Request};
+use axum::extract::{FromRequest, Multipart, Request};
 use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use serde::de::DeserializeOwned;
@@ -119,11 +119,8 @@ pub(super) fn see_other(to: &str, cookie: Option<cookie::Cookie<'static>>) -> Re
 }
 
 /// The address of the client that sent `request`, when the server knows it.
-pub(super) fn client_of(request: &Request) -> Option<std::net::SocketAddr> {
-    request
-        .extensions()
-        .get::<ConnectInfo<std::net::SocketAddr>>()
-        .map(|c| c.0)
+pub(super) fn client_of(request: &Request) -> Option<std::net::IpAddr> {
+    super::super::client_address::of_request(request)
 }
 
 /// Reads a urlencoded form into `T`; a malformed one is a 400 page.
