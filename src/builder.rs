@@ -94,16 +94,19 @@ impl Builder {
                 continue;
             };
             let id = version.bot_version_id;
+            let started = std::time::Instant::now();
             let ended = tokio::select! {
                 // Dropped: the build is killed and claimed again after its lease.
                 _ = stop.cancelled() => return,
                 ended = self.build_renewing(&version) => ended,
             };
             if let Ended::Done { status, built, log } = ended {
-                tracing::info!(bot_version_id = id, status, "build ended");
+                // Spent from its owner's daily build time, whatever the outcome.
+                let took_ms = started.elapsed().as_millis() as i64;
+                tracing::info!(bot_version_id = id, status, took_ms, "build ended");
                 match self
                     .storage
-                    .finish_build(id, &self.owner, status, built.as_deref(), &log)
+                    .finish_build(id, &self.owner, status, built.as_deref(), &log, took_ms)
                     .await
                 {
                     Ok(true) => {}

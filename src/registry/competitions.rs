@@ -1219,7 +1219,8 @@ mod tests {
                     "w",
                     build_status::INVALID,
                     None,
-                    "crashed"
+                    "crashed",
+                    1_000
                 )
                 .await
                 .unwrap()

@@ -147,6 +147,7 @@ mod tests {
                 build_status::READY,
                 None,
                 "ok",
+                0,
             )
             .await
             .unwrap();

@@ -24,29 +24,58 @@ pub fn build_retries_exhausted(attempts: i64) -> String {
     )
 }
 
+/// The order in which versions are built ([`Storage::claim_build`]): the oldest
+/// waiting version of the owner least recently served (table `queue_lane`, lanes
+/// `build:` and the owner: an entrant, all its bots together, or the owner token of a
+/// bot of no entrant). So a version waits behind at most one build of each other owner
+/// that has versions waiting, however many one owner uploads. `$3` is `building`, `$4`
+/// now: a version whose build's lease is held is not waiting.
+pub const FAIR_BUILD_ORDER: &str = "
+    with heads as (
+        select 'build:' || coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash) as lane,
+            min(v.bot_version_id) as bot_version_id
+        from bot_version v join bot b on b.bot_id = v.bot_id
+        where v.build_status = $3
+            and (v.build_lease_expires_at is null or v.build_lease_expires_at < $4)
+        group by 'build:' || coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash)
+    )
+    select v.bot_version_id from heads h
+    join bot_version v on v.bot_version_id = h.bot_version_id
+    left join queue_lane l on l.lane = h.lane
+    order by coalesce(l.served, 0), h.bot_version_id";
+
+/// Marks the owner of the version `$1` as served last by the builders.
+const MARK_BUILD_SERVED: &str = "
+    insert into queue_lane (lane, served)
+    select 'build:' || coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash),
+        (select coalesce(max(served), 0) + 1 from queue_lane)
+    from bot_version v join bot b on b.bot_id = v.bot_id
+    where v.bot_version_id = $1
+    on conflict (lane) do update set served = excluded.served";
+
 impl Storage {
-    /// Claims the oldest version waiting for its build, for `owner` until `lease_ms`
-    /// from now: no other worker builds it meanwhile. A build whose worker died (its
-    /// lease expired) is claimed again; each claim counts in `build_attempts`, and the
-    /// claimer records a claim past [`MAX_BUILD_ATTEMPTS`] as failed.
+    /// Claims the next version waiting for its build in the fair order
+    /// ([`FAIR_BUILD_ORDER`]: owners take turns), for `owner` until `lease_ms` from now:
+    /// no other worker builds it meanwhile. A build whose worker died (its lease
+    /// expired) is claimed again; each claim counts in `build_attempts`, and the claimer
+    /// records a claim past [`MAX_BUILD_ATTEMPTS`] as failed.
     ///
     /// # Errors
     /// Database failures.
     pub async fn claim_build(&self, owner: &str, lease_ms: i64) -> Result<Option<BotVersionRow>> {
         let _turn = self.write_turn().await;
         let now = now_ms();
+        // PostgreSQL: a claim skips the versions other builders are claiming at that
+        // moment, so builders of several machines never wait on each other.
         let lock = match self.backend() {
             Backend::Sqlite => "",
-            Backend::Postgres => "for update skip locked",
+            Backend::Postgres => "for update of v skip locked",
         };
-        Ok(sqlx::query_as(&format!(
+        let claimed: Option<BotVersionRow> = sqlx::query_as(&format!(
             "update bot_version set build_owner = $1, build_lease_expires_at = $2,
                  build_attempts = build_attempts + 1
-             where bot_version_id = (
-                 select bot_version_id from bot_version
-                 where build_status = $3
-                     and (build_lease_expires_at is null or build_lease_expires_at < $4)
-                 order by bot_version_id limit 1 {lock})
+             where bot_version_id = ({FAIR_BUILD_ORDER} limit 1 {lock})
+                 and build_status = $3
              returning *"
         ))
         .bind(owner)
@@ -54,7 +83,14 @@ impl Storage {
         .bind(build_status::BUILDING)
         .bind(now)
         .fetch_optional(self.pool())
-        .await?)
+        .await?;
+        if let Some(v) = &claimed {
+            sqlx::query(MARK_BUILD_SERVED)
+                .bind(v.bot_version_id)
+                .execute(self.pool())
+                .await?;
+        }
+        Ok(claimed)
     }
 
     /// Extends `owner`'s claim on a build. Returns false if the claim was lost.
@@ -81,7 +117,8 @@ impl Storage {
         Ok(done.rows_affected() == 1)
     }
 
-    /// Records a build's end by `owner` (who claimed it): `ready` (`ok`) with `built`
+    /// Records a build's end by `owner` (who claimed it), which took `build_ms` (spent
+    /// from its owner's daily build time): `ready` (`ok`) with `built`
     /// (the stored bundle of the built folder), or `build_failed` with its queued matches
     /// recorded as crashed ("the build failed: ..."), in one transaction. Returns false,
     /// writing nothing, if `owner` no longer holds the build.
@@ -95,6 +132,7 @@ impl Storage {
         status: &str,
         built: Option<&str>,
         log: &str,
+        build_ms: i64,
     ) -> Result<bool> {
         let ok = status == build_status::READY;
         let mut log = log.to_string();
@@ -110,7 +148,8 @@ impl Storage {
         let mut tx = self.begin_write().await?;
         let done = sqlx::query(
             "update bot_version set build_status = $1, build_log = $2, built_at = $3,
-                 built_sha256 = $4, build_owner = null, build_lease_expires_at = null
+                 built_sha256 = $4, build_owner = null, build_lease_expires_at = null,
+                 build_ms = $8
              where bot_version_id = $5 and build_owner = $6 and build_status = $7",
         )
         .bind(status)
@@ -120,6 +159,7 @@ impl Storage {
         .bind(bot_version_id)
         .bind(owner)
         .bind(build_status::BUILDING)
+        .bind(build_ms.max(0))
         .execute(&mut *tx)
         .await?;
         if done.rows_affected() == 0 {
@@ -190,9 +230,16 @@ mod tests {
             assert_eq!(again.bot_version_id, v.bot_version_id);
             assert_eq!((claimed.build_attempts, again.build_attempts), (1, 2));
             assert!(
-                !db.finish_build(v.bot_version_id, "w1", build_status::FAILED, None, "late")
-                    .await
-                    .unwrap()
+                !db.finish_build(
+                    v.bot_version_id,
+                    "w1",
+                    build_status::FAILED,
+                    None,
+                    "late",
+                    0
+                )
+                .await
+                .unwrap()
             );
             assert!(
                 db.finish_build(
@@ -200,7 +247,8 @@ mod tests {
                     "w2",
                     build_status::FAILED,
                     None,
-                    "cc: error: no such file\n"
+                    "cc: error: no such file\n",
+                    2_500
                 )
                 .await
                 .unwrap()
@@ -231,7 +279,8 @@ mod tests {
                     "w1",
                     build_status::READY,
                     Some("b1"),
-                    "ok"
+                    "ok",
+                    1_500
                 )
                 .await
                 .unwrap()
@@ -245,6 +294,42 @@ mod tests {
                 .unwrap()
                 .unwrap();
             assert_eq!(v2.build_status, build_status::READY);
+        }
+    }
+
+    #[tokio::test]
+    async fn owners_take_turns_at_the_builder_however_many_one_uploads() {
+        for (db, _guard) in backends().await {
+            // A floods six versions (two bots of one owner token), then B and C upload one.
+            let a = db.create_bot("a1", "ha", &with_build()).await.unwrap();
+            let a2 = db.create_bot("a2", "ha", &with_build()).await.unwrap();
+            for _ in 0..2 {
+                db.add_bot_version(a.bot_id, &with_build()).await.unwrap();
+                db.add_bot_version(a2.bot_id, &with_build()).await.unwrap();
+            }
+            let b = db.create_bot("b", "hb", &with_build()).await.unwrap();
+            let c = db.create_bot("c", "hc", &with_build()).await.unwrap();
+            let mut order = Vec::new();
+            while let Some(v) = db.claim_build("w", 60_000).await.unwrap() {
+                let who = match v.bot_id {
+                    id if id == b.bot_id => "b",
+                    id if id == c.bot_id => "c",
+                    _ => "a",
+                };
+                order.push(who);
+                assert!(
+                    db.finish_build(v.bot_version_id, "w", build_status::READY, None, "", 10)
+                        .await
+                        .unwrap()
+                );
+            }
+            // B and C wait behind one build of A's, not six.
+            assert_eq!(order, ["a", "b", "c", "a", "a", "a", "a", "a"]);
+            // A newcomer after that is next, ahead of A's next upload.
+            db.add_bot_version(a.bot_id, &with_build()).await.unwrap();
+            let d = db.create_bot("d", "hd", &with_build()).await.unwrap();
+            let first = db.claim_build("w", 60_000).await.unwrap().unwrap();
+            assert_eq!(first.bot_id, d.bot_id);
         }
     }
 }

@@ -212,3 +212,115 @@ pub(super) async fn hold_in(
     let usage = owner_usage_in(tx, &limits.owner, limits.since).await?;
     Ok(limits.refusal(&usage).map(|kind| (kind, usage)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::storage::bots::VersionRefusal;
+    use crate::storage::test_support::{backends, plain_version, with_build};
+
+    #[tokio::test]
+    async fn an_owners_quotas_are_counted_where_the_version_is_stored() {
+        for (db, _guard) in backends().await {
+            let now = crate::storage::now_ms();
+            let owner = Owner::Token("ho".into());
+            let limits = OwnerLimits {
+                owner: owner.clone(),
+                since: now - 86_400_000,
+                most_pending: Some(2),
+                most_versions_outside: Some(4),
+                most_build_ms: Some(60_000),
+            };
+            let first = db
+                .create_bot_within("o", "ho", None, &with_build(), Some(&limits))
+                .await
+                .unwrap()
+                .unwrap();
+            db.add_bot_version_within(first.bot_id, &with_build(), &[], Some(&limits))
+                .await
+                .unwrap()
+                .unwrap();
+            // Two waiting for their build: a third is refused, and stores nothing.
+            let refused = db
+                .add_bot_version_within(first.bot_id, &with_build(), &[], Some(&limits))
+                .await
+                .unwrap()
+                .unwrap_err();
+            let VersionRefusal::Owner(OwnerQuotaKind::Pending, usage) = refused else {
+                panic!("{refused:?}")
+            };
+            assert_eq!(usage.pending, [("o".to_string(), 1), ("o".to_string(), 2)]);
+            // Both built (20 s each, one failed): two versions count, 40 s spent.
+            for status in [build_status::READY, build_status::FAILED] {
+                let v = db.claim_build("w", 60_000).await.unwrap().unwrap();
+                db.finish_build(v.bot_version_id, "w", status, None, "", 20_000)
+                    .await
+                    .unwrap();
+            }
+            // Another owner is not held by it.
+            db.create_bot_within("x", "hx", None, &with_build(), Some(&limits))
+                .await
+                .unwrap()
+                .unwrap();
+            let usage = db.owner_usage(&owner, limits.since).await.unwrap();
+            assert_eq!(usage.versions_outside, 1, "the failed build does not count");
+            assert_eq!(usage.build_ms, 40_000);
+            assert!(usage.pending.is_empty());
+            // Versions without a build are not pending: up to the daily quota of 4.
+            for _ in 0..3 {
+                db.add_bot_version_within(first.bot_id, &plain_version(), &[], Some(&limits))
+                    .await
+                    .unwrap()
+                    .unwrap();
+            }
+            let refused = db
+                .add_bot_version_within(first.bot_id, &plain_version(), &[], Some(&limits))
+                .await
+                .unwrap()
+                .unwrap_err();
+            assert!(
+                matches!(
+                    refused,
+                    VersionRefusal::Owner(OwnerQuotaKind::VersionsOutside, _)
+                ),
+                "{refused:?}"
+            );
+            // Build time: past a minute, refused whatever else is left.
+            let roomy = OwnerLimits {
+                most_versions_outside: None,
+                most_build_ms: Some(40_000),
+                ..limits.clone()
+            };
+            let refused = db
+                .add_bot_version_within(first.bot_id, &plain_version(), &[], Some(&roomy))
+                .await
+                .unwrap()
+                .unwrap_err();
+            assert!(
+                matches!(refused, VersionRefusal::Owner(OwnerQuotaKind::BuildTime, _)),
+                "{refused:?}"
+            );
+            // An entrant's bots count together.
+            let e = db.create_entrant("team", "[]", "hk").await.unwrap();
+            let mine = OwnerLimits {
+                owner: Owner::Entrant(e.entrant_id),
+                most_pending: Some(1),
+                ..limits.clone()
+            };
+            db.create_bot_within("e1", "he1", Some(e.entrant_id), &with_build(), Some(&mine))
+                .await
+                .unwrap()
+                .unwrap();
+            let refused = db
+                .create_bot_within("e2", "he2", Some(e.entrant_id), &with_build(), Some(&mine))
+                .await
+                .unwrap()
+                .unwrap_err();
+            assert!(matches!(
+                refused,
+                VersionRefusal::Owner(OwnerQuotaKind::Pending, _)
+            ));
+            assert!(db.get_bot_by_name("e2").await.unwrap().is_none());
+        }
+    }
+}
