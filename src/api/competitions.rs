@@ -261,6 +261,11 @@ pub struct CompetitionView {
     pub reveal_private_mazes: bool,
     /// The match limits (those left out are the server's).
     pub limits: Limits,
+    /// The longest one of its matches may last, in wall-clock ms (null without time
+    /// limits): 2 x the CPU time its limits allow (startup + 999 moves + the time bank)
+    /// + 10 s. A bot that waits instead of thinking is stopped there (`timeout`, limit
+    /// `match_wall_clock`); one that thinks is not while it gets half a core.
+    pub match_wall_clock_ms: Option<u64>,
     /// Its mazes.
     pub mazes: Vec<MazeLine>,
     /// Entrants with a bot in it.
@@ -319,6 +324,11 @@ pub(super) async fn view(
         max_selected: c.max_selected,
         reveal_private_mazes: c.reveal_private_mazes,
         limits: c.limit_set(),
+        match_wall_clock_ms: c
+            .limit_set()
+            .apply(crate::runner::Limits::default())
+            .match_wall_clock()
+            .map(|d| d.as_millis() as u64),
         mazes,
         entrants: state
             .storage

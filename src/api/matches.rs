@@ -268,10 +268,19 @@ pub(crate) async fn queue_match(
     };
     // The quotas and the owner's limit counted again where the match is queued:
     // requests sent at once all pass the checks above before any is queued.
+    // A competition's practice match plays under that competition's limits, which its
+    // page publishes (with the match's wall-clock ceiling).
+    let match_limits =
+        crate::registry::competitions::practice_limits(&state.storage, bot.bot_id, maze.maze_id)
+            .await?
+            .map(|l| serde_json::to_string(&l))
+            .transpose()
+            .map_err(|e| ApiError::Internal(format!("limits: {e}")))?;
     let limits = QueueLimits {
         bot_id: bot.bot_id,
         most_queued: (!caller.is_admin()).then_some(state.settings.max_queued_per_owner),
         practice,
+        match_limits,
     };
     let match_id = match state
         .storage

@@ -488,6 +488,42 @@ pub async fn check_practice(
     Ok(Ok(quotas))
 }
 
+/// The limits a practice match of bot `bot_id` on maze `maze_id` plays under: those of
+/// the competition whose practice maze it is, the one the bot is entered in first, else
+/// the first of its entrant's (by id); `None` (the server's) for a maze that is no
+/// practice maze of theirs, or a bot of no entrant.
+///
+/// # Errors
+/// The database.
+pub async fn practice_limits(
+    storage: &Storage,
+    bot_id: i64,
+    maze_id: i64,
+) -> Result<Option<Limits>> {
+    let Some(entrant_id) = storage.entrant_of_bot(bot_id).await? else {
+        return Ok(None);
+    };
+    let entered: Vec<i64> = storage
+        .competitions_of_bot(bot_id)
+        .await?
+        .iter()
+        .map(|c| c.competition_id)
+        .collect();
+    let mut theirs = storage.competitions_of_entrant(entrant_id).await?;
+    theirs.sort_by_key(|c| (!entered.contains(&c.competition_id), c.competition_id));
+    for c in theirs {
+        let practice = storage
+            .competition_mazes(c.competition_id)
+            .await?
+            .iter()
+            .any(|m| m.maze_id == maze_id && m.maze_set == "practice");
+        if practice {
+            return Ok(Some(c.limit_set()));
+        }
+    }
+    Ok(None)
+}
+
 /// What practice quota `q`, found used up when a match was to be queued, says at
 /// `now`, and the quota.
 ///

@@ -54,6 +54,16 @@ pub const DEFAULT_TIME_BANK: Duration = Duration::from_secs(30);
 /// clock while it gets at least a quarter of a core, however busy the machine.
 pub const WALL_BACKSTOP_FACTOR: u32 = 4;
 
+/// A match's wall-clock ceiling, as a multiple of the most CPU time its limits let the
+/// bot use ([`Limits::match_wall_clock`]): a bot that thinks to its limits all match
+/// long is never stopped by it while it gets half a core, and one that waits holds a
+/// worker no longer than the ceiling says.
+pub const MATCH_WALL_FACTOR: u32 = 2;
+
+/// Added to every match's wall-clock ceiling: the bot's start and end, the referee's own
+/// time.
+pub const MATCH_WALL_SLACK: Duration = Duration::from_secs(10);
+
 /// Default memory limit: 1 GiB of resident memory for all the bot's processes together
 /// (in the sandbox). Without the sandbox each process gets twice this as address space
 /// (JavaScript runtimes reserve a lot of virtual memory up front).
@@ -191,6 +201,23 @@ impl Default for Limits {
 }
 
 impl Limits {
+    /// The most CPU time these limits let a bot use over a whole match: the startup
+    /// limit, the move limit for each later step, and the time bank; `None` without
+    /// time limits.
+    pub fn most_cpu_time(&self) -> Option<Duration> {
+        let startup = self.startup_timeout?;
+        let each = self.move_timeout?;
+        Some(startup + each * self.max_steps.saturating_sub(1) + self.time_bank)
+    }
+
+    /// The most wall-clock time a match may last under these limits, published with
+    /// them: [`MATCH_WALL_FACTOR`] x [`Limits::most_cpu_time`] + [`MATCH_WALL_SLACK`].
+    /// Past it the match ends as `timeout` (limit `match_wall_clock`). `None` without
+    /// time limits (`--no-timeout`).
+    pub fn match_wall_clock(&self) -> Option<Duration> {
+        Some(self.most_cpu_time()? * MATCH_WALL_FACTOR + MATCH_WALL_SLACK)
+    }
+
     fn record(&self, sandbox: &Sandbox) -> LimitsRecord {
         let sandboxed = matches!(sandbox, Sandbox::Full(_));
         LimitsRecord {
@@ -198,6 +225,7 @@ impl Limits {
             startup_timeout_ms: self.startup_timeout.map(|d| d.as_millis() as u64),
             move_timeout_ms: self.move_timeout.map(|d| d.as_millis() as u64),
             time_bank_ms: self.move_timeout.map(|_| self.time_bank.as_millis() as u64),
+            match_wall_clock_ms: self.match_wall_clock().map(|d| d.as_millis() as u64),
             memory_limit_mb: self.memory_limit_mb,
             process_limit: self.process_limit.filter(|_| sandboxed),
             scratch_mb: sandboxed.then_some(self.scratch_mb),

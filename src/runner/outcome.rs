@@ -187,6 +187,10 @@ pub struct LimitsRecord {
     /// records made before there was a bank: they had none, and wall-clock limits).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_bank_ms: Option<u64>,
+    /// The most wall-clock time the match could last (absent in records made before
+    /// matches had a ceiling, and without time limits).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub match_wall_clock_ms: Option<u64>,
     /// The bot's memory limit in MiB; `None`: no limit. In the sandbox it counts the
     /// resident memory of all the bot's processes together; without it, it is each
     /// process's address space.

@@ -82,6 +82,8 @@ pub struct Session {
     stderr: framing::StderrReader<BotOutput>,
     started: Instant,
     limits: Limits,
+    /// When the match passes its wall-clock ceiling ([`Limits::match_wall_clock`]).
+    match_deadline: Option<Instant>,
     cpu_mark: Option<u64>,
     /// Whether the bot's CPU time can be read: the time limits count it, else they
     /// count wall-clock time.
@@ -199,6 +201,7 @@ impl Session {
             stdin,
             started,
             limits,
+            match_deadline: limits.match_wall_clock().map(|c| started + c),
             cpu_mark: Some(0),
             cpu_counted,
             bank_left_us: limits.time_bank.as_micros() as u64,
@@ -364,9 +367,22 @@ impl Session {
             limit,
             allowed_us,
             mark,
-            deadline: limit.map(|l| since + l * factor),
+            deadline: self.within_match(limit.map(|l| since + l * factor)),
             factor,
         }
+    }
+
+    /// `deadline`, or the match's wall-clock ceiling if that comes first.
+    fn within_match(&self, deadline: Option<Instant>) -> Option<Instant> {
+        match (deadline, self.match_deadline) {
+            (Some(d), Some(m)) => Some(d.min(m)),
+            (d, m) => d.or(m),
+        }
+    }
+
+    /// Whether the match has passed its wall-clock ceiling.
+    fn past_ceiling(&self) -> bool {
+        self.match_deadline.is_some_and(|m| Instant::now() >= m)
     }
 
     /// Waits for the bot's next line under `ask`'s limits: `Ok` when the replies hold
@@ -381,11 +397,13 @@ impl Session {
             };
             // The wall-clock backstop moves out with the CPU time the bot uses: a bot
             // that thinks on a busy machine is not stopped by the clock.
-            if let (Waited::TimedOut, Some(l), true) = (&waited, limit, self.cpu_counted) {
+            if let (Waited::TimedOut, Some(l), true, false) =
+                (&waited, limit, self.cpu_counted, self.past_ceiling())
+            {
                 let used = self.cpu_used(mark);
                 let backstop = since + (l + Duration::from_micros(used)) * factor;
                 if Instant::now() < backstop {
-                    ask.deadline = Some(backstop);
+                    ask.deadline = self.within_match(Some(backstop));
                     continue;
                 }
             }
@@ -407,6 +425,22 @@ impl Session {
             Waited::Got(Err(e)) => {
                 let reason = format!("reading the bot's stdout failed: {e}");
                 self.fault_or_limit(MatchStatus::Crashed, reason, step)
+            }
+            Waited::TimedOut | Waited::Later if self.past_ceiling() => {
+                let ceiling = self.limits.match_wall_clock().unwrap_or_default();
+                let used = self.process.cpu_us().map_or(0, |us| us / 1000);
+                let reason = format!(
+                    "the match lasted {} s of wall-clock time, its ceiling ({} x the {} s of \
+                     CPU time its limits allow + {} s), in which the bot used {} ms of CPU \
+                     time: it was waiting, not thinking (step {step} was being asked)",
+                    self.started.elapsed().as_secs(),
+                    super::MATCH_WALL_FACTOR,
+                    self.limits.most_cpu_time().unwrap_or_default().as_secs(),
+                    super::MATCH_WALL_SLACK.as_secs(),
+                    used
+                );
+                let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, step);
+                with_time_limit(verdict, "match_wall_clock", ceiling.as_millis() as u64)
             }
             Waited::TimedOut | Waited::Later => {
                 let what = if step == 1 { "startup" } else { "move" };

@@ -202,22 +202,25 @@ const SAME_OWNER: &str = "b.bot_id in (
         or (x.entrant_id is null and o.entrant_id is null
             and o.owner_token_hash = x.owner_token_hash)))";
 
-/// Inserts a queued single match (not a tournament's); its id.
+/// Inserts a queued single match (not a tournament's), played under `limits` (JSON, as
+/// a tournament's; `None`: the worker's); its id.
 async fn insert_single(
     conn: &mut sqlx::AnyConnection,
     bot_version_id: i64,
     maze_id: i64,
     seed: i64,
+    limits: Option<&str>,
 ) -> Result<i64> {
     Ok(sqlx::query_scalar(
-        "insert into match (bot_version_id, maze_id, seed, priority, created_at)
-         values ($1, $2, $3, $4, $5) returning match_id",
+        "insert into match (bot_version_id, maze_id, seed, priority, created_at, limits)
+         values ($1, $2, $3, $4, $5, $6) returning match_id",
     )
     .bind(bot_version_id)
     .bind(maze_id)
     .bind(seed)
     .bind(PRIORITY_SINGLE)
     .bind(now_ms())
+    .bind(limits)
     .fetch_one(conn)
     .await?)
 }
@@ -231,6 +234,9 @@ pub struct QueueLimits {
     pub most_queued: Option<i64>,
     /// The practice quotas of the competitions whose practice maze it is.
     pub practice: Vec<PracticeQuota>,
+    /// The limits it plays under (JSON, [`crate::competition::Limits`]): a competition's
+    /// practice match plays under that competition's; `None`: the worker's.
+    pub match_limits: Option<String>,
 }
 
 /// A competition's practice quota: at most `limit` practice matches of entrant
@@ -300,8 +306,8 @@ pub struct ClaimedMatch {
     /// `mms` for a mouse of the mms simulator; `None` for protocol v1.
     #[sqlx(default)]
     pub protocol: Option<String>,
-    /// The tournament's match limits (JSON, [`crate::competition::Limits`]), if it has
-    /// its own.
+    /// The match's own limits (a competition's practice match) or its tournament's
+    /// (JSON, [`crate::competition::Limits`]), if it has its own.
     pub limits: Option<String>,
 }
 
@@ -422,7 +428,7 @@ impl Storage {
     /// Database failures (including unknown bot version or maze ids).
     pub async fn queue_match(&self, bot_version_id: i64, maze_id: i64, seed: i64) -> Result<i64> {
         let mut conn = self.pool().acquire().await?;
-        insert_single(&mut conn, bot_version_id, maze_id, seed).await
+        insert_single(&mut conn, bot_version_id, maze_id, seed, None).await
     }
 
     /// Queues a single match as [`Storage::queue_match`] does, unless it would go over
@@ -480,7 +486,14 @@ impl Storage {
                 return Ok(Err(QueueRefusal::Practice(*q)));
             }
         }
-        let match_id = insert_single(&mut tx, bot_version_id, maze_id, seed).await?;
+        let match_id = insert_single(
+            &mut tx,
+            bot_version_id,
+            maze_id,
+            seed,
+            limits.match_limits.as_deref(),
+        )
+        .await?;
         tx.commit().await?;
         Ok(Ok(match_id))
     }
@@ -627,7 +640,8 @@ impl Storage {
         Ok(sqlx::query_as(
             "select m.match_id, m.seed, v.command, v.dir, v.bundle_sha256, v.built_sha256,
                  z.layout, m.tournament_id, v.env, v.runtime, v.protocol,
-                 (select t.limits from tournament t where t.tournament_id = m.tournament_id) as limits
+                 coalesce(m.limits,
+                     (select t.limits from tournament t where t.tournament_id = m.tournament_id)) as limits
              from match m join bot_version v on v.bot_version_id = m.bot_version_id
              join maze z on z.maze_id = m.maze_id where m.match_id = $1",
         )
@@ -1103,6 +1117,7 @@ mod tests {
             bot_id,
             most_queued: Some(1_000),
             practice: Vec::new(),
+            match_limits: None,
         };
         let tasks: Vec<_> = (0..60)
             .map(|i| {

@@ -9,6 +9,7 @@ mod client;
 mod competitions;
 mod connections;
 mod contain;
+mod crowd;
 mod deploy;
 mod faults;
 mod hostile;

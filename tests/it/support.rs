@@ -257,8 +257,11 @@ impl TestServer {
             .args(extra)
             .env("MAZEARENA_ADMIN_TOKEN", ADMIN)
             .env("MAZEARENA_SANDBOX", sandbox().level())
-            // Tests register many bots from one address; the limit has a test of its own.
+            // Tests register many bots from one address and upload many versions of one
+            // owner at once; the limits have tests of their own (crowd.rs).
             .env("MAZEARENA_REGISTRATIONS_PER_HOUR", "10000")
+            .env("MAZEARENA_VERSIONS_PER_DAY", "10000")
+            .env("MAZEARENA_PENDING_BUILDS_PER_OWNER", "1000")
             .envs(env.iter().copied())
             .current_dir(root())
             .stdout(std::process::Stdio::piped())

@@ -131,6 +131,19 @@ pub(super) async fn competition_page(
                 ),
             ),
             (
+                "the longest a match may last (wall-clock time)".into(),
+                match effective.match_wall_clock() {
+                    Some(c) => format!(
+                        "{}: {} x the CPU time these limits allow ({}) + {} s; a bot that waits past it ends as a timeout, one that thinks is not stopped while it gets half a core",
+                        duration_words(c),
+                        crate::runner::MATCH_WALL_FACTOR,
+                        duration_words(effective.most_cpu_time().unwrap_or_default()),
+                        crate::runner::MATCH_WALL_SLACK.as_secs()
+                    ),
+                    None => "no limit".into(),
+                },
+            ),
+            (
                 "memory, all the bot's processes (memory_limit_mb)".into(),
                 effective
                     .memory_limit_mb
@@ -161,4 +174,14 @@ pub(super) async fn competition_page(
         private,
         results,
     })))
+}
+
+/// "17 min 20 s", "45 s": a duration in words.
+fn duration_words(d: std::time::Duration) -> String {
+    let secs = d.as_secs_f64().ceil() as u64;
+    match (secs / 60, secs % 60) {
+        (0, s) => format!("{s} s"),
+        (m, 0) => format!("{m} min"),
+        (m, s) => format!("{m} min {s} s"),
+    }
 }
