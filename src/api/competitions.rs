@@ -262,9 +262,10 @@ pub struct CompetitionView {
     /// The match limits (those left out are the server's).
     pub limits: Limits,
     /// The longest one of its matches may last, in wall-clock ms (null without time
-    /// limits): 2 x the CPU time its limits allow (startup + 999 moves + the time bank)
-    /// + 10 s. A bot that waits instead of thinking is stopped there (`timeout`, limit
-    /// `match_wall_clock`); one that thinks is not while it gets half a core.
+    /// limits): twice the CPU time its limits allow (startup, 999 moves and the time
+    /// bank), and 10 s more. A bot that waits instead of thinking is stopped there
+    /// (`timeout`, limit `match_wall_clock`); one that thinks is not while it gets half
+    /// a core.
     pub match_wall_clock_ms: Option<u64>,
     /// Its mazes.
     pub mazes: Vec<MazeLine>,

@@ -4,7 +4,6 @@
 //! or by a read made at once on the pipe that `ppoll` just found ready (the match's
 //! fast wait, [`super::session`]): the same buffers, so a line may come partly each way.
 
-use std::collections::VecDeque;
 use std::os::fd::AsFd;
 
 use tokio::io::{AsyncRead, AsyncReadExt};
@@ -45,7 +44,13 @@ pub struct StderrReader<R> {
     tail: Tail,
     splitter: LineSplitter,
     buf: Box<[u8]>,
+    /// The step's output, for the charge of a flood ([`super::flood`]).
+    pub meter: super::flood::FloodMeter,
 }
+
+/// How much one read of a bot's stderr takes at most: a whole pipe's worth, so that a
+/// flood costs the referee one read for each of the bot's full writes.
+const STDERR_READ_BYTES: usize = 64 * 1024;
 
 impl<R: AsyncRead + Unpin> StderrReader<R> {
     /// Reads `stream`, keeping its last `cap` bytes; with `echo`, each line is also
@@ -56,7 +61,8 @@ impl<R: AsyncRead + Unpin> StderrReader<R> {
             open: true,
             tail: Tail::new(cap),
             splitter: LineSplitter::new(echo),
-            buf: vec![0u8; 8192].into_boxed_slice(),
+            buf: vec![0u8; STDERR_READ_BYTES].into_boxed_slice(),
+            meter: super::flood::FloodMeter::default(),
         }
     }
 
@@ -128,6 +134,7 @@ impl<R> StderrReader<R> {
                 self.splitter.finish();
             }
             Ok(n) => {
+                self.meter.add(n as u64);
                 self.tail.push(&self.buf[..n]);
                 self.splitter.push(&self.buf[..n]);
             }
@@ -191,11 +198,27 @@ impl LineSplitter {
     }
 
     fn push(&mut self, chunk: &[u8]) {
-        for &b in chunk {
-            if b == b'\n' {
-                self.emit();
-            } else if self.partial.len() <= STDERR_LINE_BYTES {
-                self.partial.push(b);
+        // Past the trace's budget no line is kept (nor printed): nothing to cut.
+        if self.cut && !self.echo {
+            return;
+        }
+        let mut rest = chunk;
+        loop {
+            let (piece, newline) = match memchr::memchr(b'\n', rest) {
+                Some(i) => (&rest[..i], true),
+                None => (rest, false),
+            };
+            // A line is kept up to its cut (and one byte more, for the "…").
+            let room = (STDERR_LINE_BYTES + 1).saturating_sub(self.partial.len());
+            self.partial
+                .extend_from_slice(&piece[..piece.len().min(room)]);
+            if !newline {
+                return;
+            }
+            self.emit();
+            rest = &rest[piece.len() + 1..];
+            if self.cut && !self.echo {
+                return;
             }
         }
     }
@@ -224,7 +247,7 @@ impl LineSplitter {
     }
 }
 
-/// The most stderr reads in a row (8 KiB each) before an awaited event that is ready
+/// The most stderr reads in a row (up to 64 KiB each) before an awaited event that is ready
 /// (a reply, the bot's exit) is taken in anyway: a bot that writes stderr without end
 /// cannot hold its own answer back.
 pub const STDERR_READS_BEFORE_REPLY: u32 = 64;
@@ -417,11 +440,13 @@ impl Lines {
     }
 }
 
-/// The last bytes of a stream, up to a cap, and how many came in all.
+/// The last bytes of a stream, up to a cap, and how many came in all. Kept in a buffer
+/// of up to twice the cap that drops its oldest half when full, so that taking in a
+/// chunk costs copying it (and now and then moving a cap's worth), never a byte at a time.
 #[derive(Debug)]
 struct Tail {
     cap: usize,
-    kept: VecDeque<u8>,
+    kept: Vec<u8>,
     total: u64,
 }
 
@@ -429,28 +454,35 @@ impl Tail {
     fn new(cap: usize) -> Self {
         Tail {
             cap,
-            kept: VecDeque::with_capacity(cap.min(8192)),
+            kept: Vec::with_capacity(cap.min(8192)),
             total: 0,
         }
     }
 
     fn push(&mut self, chunk: &[u8]) {
         self.total += chunk.len() as u64;
-        self.kept.extend(chunk);
-        if self.kept.len() > self.cap {
-            let extra = self.kept.len() - self.cap;
-            self.kept.drain(..extra);
+        if chunk.len() >= self.cap {
+            self.kept.clear();
+            self.kept
+                .extend_from_slice(&chunk[chunk.len() - self.cap..]);
+            return;
         }
+        if self.kept.len() + chunk.len() > 2 * self.cap {
+            let keep_from = self.kept.len() - (self.cap - chunk.len());
+            self.kept.drain(..keep_from);
+        }
+        self.kept.extend_from_slice(chunk);
     }
 
     /// The tail as text (lossy UTF-8), prefixed with a note of how much was cut.
-    fn into_text(mut self) -> String {
-        let kept = self.kept.len() as u64;
-        let text = String::from_utf8_lossy(self.kept.make_contiguous()).into_owned();
-        if self.total > kept {
+    fn into_text(self) -> String {
+        let from = self.kept.len().saturating_sub(self.cap);
+        let kept = &self.kept[from..];
+        let text = String::from_utf8_lossy(kept).into_owned();
+        if self.total > kept.len() as u64 {
             format!(
                 "[... {} earlier bytes of stderr not kept]\n{text}",
-                self.total - kept
+                self.total - kept.len() as u64
             )
         } else {
             text
@@ -656,7 +688,7 @@ mod tests {
 
     #[tokio::test]
     async fn a_bot_that_writes_stderr_without_end_still_has_its_answer_read() {
-        // stderr keeps coming, from before the answer to after it (8 MiB through a full
+        // stderr keeps coming, from before the answer to after it (32 MiB through a full
         // pipe): the answer is taken after a bounded number of stderr reads (in a row
         // before it, and at once after it), the rest of the stderr later.
         let (out, mut replies, err, mut stderr) = bot_pipes();
@@ -664,7 +696,7 @@ mod tests {
         let writer = std::thread::spawn(move || {
             let chunk = vec![b'x'; 4096];
             let mut sent = 0;
-            while sent < 8 << 20 {
+            while sent < 32 << 20 {
                 match nix::unistd::write(&err, &chunk) {
                     Ok(n) => sent += n,
                     Err(nix::errno::Errno::EAGAIN) => std::thread::yield_now(),

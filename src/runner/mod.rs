@@ -13,6 +13,7 @@
 pub mod affinity;
 pub mod botenv;
 pub mod build;
+pub mod flood;
 pub mod framing;
 pub mod outcome;
 pub mod process;
@@ -377,6 +378,18 @@ pub async fn run_match(
         }
     }
     let mut ended = session.finish(mouse.is_none().then_some(&end)).await;
+    if ended.charged_ms > 0 {
+        record.notices.push(crate::runner::outcome::Notice {
+            step: record.total_steps,
+            message: format!(
+                "{} ms of the referee's CPU time, spent taking in the bot's output past each \
+                 step's free {} KiB, counted as the bot's CPU time (a flood of stderr or of \
+                 mms commands costs its bot, not the server)",
+                ended.charged_ms,
+                flood::FREE_BYTES_PER_STEP / 1024
+            ),
+        });
+    }
     stderr_to_last_step(&mut record, std::mem::take(&mut ended.late_stderr));
     if let Some((_, mut f)) = failure {
         (f.exit_code, f.signal) = exit_of(ended.exit, sandbox);

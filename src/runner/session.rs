@@ -68,8 +68,11 @@ pub struct Ended {
     pub exit: Option<std::process::ExitStatus>,
     /// The end of its stderr.
     pub stderr_tail: String,
-    /// CPU time of all its processes over the match, in ms.
+    /// CPU time of all its processes over the match, in ms, with what its floods of
+    /// output were charged.
     pub cpu_ms: Option<u64>,
+    /// What its floods of output were charged, in ms ([`super::flood`]).
+    pub charged_ms: u64,
     /// Stderr lines not yet handed out by [`Session::take_stderr_lines`].
     pub late_stderr: Vec<String>,
 }
@@ -320,7 +323,11 @@ impl Session {
                     if let Err(verdict) = self.wait_line(&mut ask).await {
                         return *verdict;
                     }
-                    let text = String::from_utf8_lossy(self.replies.line());
+                    let line = self.replies.line();
+                    self.stderr
+                        .meter
+                        .add(line.len() as u64 + super::flood::MMS_LINE_WEIGHT);
+                    let text = String::from_utf8_lossy(line);
                     match mouse.line(text.trim_end_matches('\r')) {
                         Ok(n) => n,
                         Err(e) => return mms_fault(e),
@@ -338,6 +345,7 @@ impl Session {
             self.turned_at = Instant::now();
         }
         let sent_at = Instant::now();
+        self.stderr.meter.begin_step();
         // PROTOCOL-v1: the first answer is timed from the process start.
         let (since, limit) = if sense.step == 1 {
             (self.started, self.limits.startup_timeout)
@@ -571,6 +579,7 @@ impl Session {
         self.process
             .cpu_us()
             .map_or(0, |now| now.saturating_sub(mark))
+            + self.stderr.meter.step_charge_us()
     }
 
     /// [`Waited::CpuOver`] if the step being waited for has used more CPU time than
@@ -610,8 +619,10 @@ impl Session {
         let (since, step, limit, allowed_us) = (ask.since, ask.step, ask.limit, ask.allowed_us);
         let answer_us = since.elapsed().as_micros() as u64;
         let cpu_now = self.process.cpu_us();
+        // The referee's time on a flood of the step's output is the bot's (`flood`).
+        let charge = self.stderr.meter.end_step();
         let cpu_us = match (self.cpu_mark, cpu_now) {
-            (Some(before), Some(now)) => Some(now.saturating_sub(before)),
+            (Some(before), Some(now)) => Some(now.saturating_sub(before) + charge),
             _ => None,
         };
         // A counter that could not be read leaves the mark where it was: the next step
@@ -674,9 +685,10 @@ impl Session {
         // Its stderr is read meanwhile: a bot blocked on a full pipe could not exit.
         let exited = self.stderr.drain_while(self.process.wait());
         let status = timeout_at(grace, exited).await.ok().and_then(Result::ok);
+        let charged_us = self.stderr.meter.charged_us() + self.stderr.meter.step_charge_us();
         let cpu_us = match (cpu_before, self.process.cpu_us()) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (a, b) => a.or(b),
+            (Some(a), Some(b)) => Some(a.max(b) + charged_us),
+            (a, b) => a.or(b).map(|us| us + charged_us),
         };
         // Kill everything even when the bot exited: its children may linger.
         self.process.kill_all();
@@ -694,6 +706,7 @@ impl Session {
             exit,
             stderr_tail,
             cpu_ms: cpu_us.map(|us| us / 1000),
+            charged_ms: charged_us / 1000,
             late_stderr,
         }
     }

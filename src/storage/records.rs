@@ -387,6 +387,7 @@ mod tests {
                 startup_timeout_ms: None,
                 move_timeout_ms: None,
                 time_bank_ms: None,
+                match_wall_clock_ms: None,
                 memory_limit_mb: None,
                 process_limit: None,
                 scratch_mb: None,

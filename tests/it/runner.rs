@@ -403,6 +403,78 @@ async fn a_stderr_flood_is_kept_to_a_bounded_tail() {
     assert!(r.stderr_tail.starts_with("[... "));
 }
 
+/// Plays `bot` on its own thread (as a worker plays each match), measuring that thread's
+/// CPU clock: the record and the referee's CPU time over the match, in ms.
+fn play_measured(bot: BotSpec) -> (MatchRecord, f64) {
+    std::thread::spawn(move || {
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .unwrap();
+        let before = mazearena::runner::flood::thread_cpu_us().unwrap();
+        let record = rt.block_on(run_match(
+            &bot,
+            &classic(1),
+            7,
+            limits(),
+            &sandbox(),
+            |_| {},
+        ));
+        let after = mazearena::runner::flood::thread_cpu_us().unwrap();
+        (record, (after - before) as f64 / 1000.0)
+    })
+    .join()
+    .unwrap()
+}
+
+/// A flood of output (short stderr lines, one endless stderr line, an mms mouse's
+/// display commands: hundreds of MiB made from one buffer, written a pipe's worth at a
+/// time) costs the referee's thread no more CPU time than the bot is charged for it,
+/// measured with the thread's own clock against the same bot played quietly; the
+/// match's result and the stderr tail are the quiet match's.
+#[test]
+fn a_flood_of_output_costs_the_referee_no_more_cpu_than_its_bot() {
+    for (mode, mib) in [("stderr", "16"), ("stderr-long", "16"), ("mms", "4")] {
+        let bot = |mib: &str| {
+            let mut b = fixture_bot("flood", &[mode, mib, "20"]);
+            if mode == "mms" {
+                b.protocol = mazearena::runner::BotProtocol::Mms;
+            }
+            b
+        };
+        let (quiet, quiet_referee) = play_measured(bot("0"));
+        let (flood, flood_referee) = play_measured(bot(mib));
+        let cpu = |r: &MatchRecord| r.timings.bot_cpu_ms.unwrap() as f64;
+        let referee = flood_referee - quiet_referee;
+        let charged = cpu(&flood) - cpu(&quiet);
+        eprintln!(
+            "{mode}: {mib} MiB x 20 steps: the referee's thread {flood_referee:.0} ms \
+             ({quiet_referee:.0} quiet), the bot {} ms ({} quiet)",
+            cpu(&flood),
+            cpu(&quiet)
+        );
+        assert!(
+            referee <= charged * 1.1 + 30.0,
+            "{mode}: the flood cost the referee {referee:.0} ms more than the quiet match, \
+             and its bot {charged:.0} ms more"
+        );
+        assert!(
+            referee > 0.0 && charged > 0.0,
+            "{mode}: no flood was taken in"
+        );
+        assert_eq!(
+            (flood.status, flood.total_steps, flood.score),
+            (quiet.status, quiet.total_steps, quiet.score),
+            "{mode}: {:?}",
+            flood.error
+        );
+        if mode != "mms" {
+            assert!(flood.stderr_tail.starts_with("[... "), "{mode}");
+            assert!(flood.stderr_tail.len() >= 60 * 1024, "{mode}");
+        }
+    }
+}
+
 #[tokio::test]
 async fn a_command_that_cannot_start_has_crashed() {
     let bot = BotSpec::new("./no-such-bot --fast", root());

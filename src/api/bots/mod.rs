@@ -372,10 +372,11 @@ pub(crate) async fn add_bot_version(
             .await?
             .iter()
             .all(|c| c.kind != "competition");
-        match state.storage.owner_of_bot(id).await? {
-            Some(o) => Some(state.settings.owner_quotas.limits(o, outside, now)),
-            None => None,
-        }
+        state
+            .storage
+            .owner_of_bot(id)
+            .await?
+            .map(|o| state.settings.owner_quotas.limits(o, outside, now))
     };
     if let Some(limits) = &owner {
         registry::owners::check(&state.storage, limits, now).await?;
