@@ -783,7 +783,7 @@ async fn a_flooding_owner_neither_delays_another_owner_nor_the_ranking() {
 }
 
 #[tokio::test]
-async fn registrations_are_limited_per_address_but_not_for_the_admin() {
+async fn anonymous_registrations_are_limited_per_address_but_not_keys_or_the_admin() {
     let dir = tempfile::tempdir().unwrap();
     let server = TestServer::start(dir.path(), &["--registrations-per-hour", "3"]);
     for i in 0..3 {
@@ -801,19 +801,48 @@ async fn registrations_are_limited_per_address_but_not_for_the_admin() {
         .call(Method::POST, "/api/bots", Some(body.clone()), None)
         .await;
     assert_error(s, &v, 429);
+    let message = v["error"]["message"].as_str().unwrap();
     assert!(
-        v["error"]["message"]
-            .as_str()
-            .unwrap()
-            .contains("127.0.0.1"),
+        message.contains("your network") && message.contains("entrant's key"),
         "{v}"
     );
+    assert!(!message.contains("127.0.0.1"), "{v}");
     let wait: u64 = headers["retry-after"].to_str().unwrap().parse().unwrap();
     assert!((1..=1200).contains(&wait), "{wait}");
+    // An anonymous entrant's registration spends the same budget.
+    let (s, v, _) = server
+        .call(
+            Method::POST,
+            "/api/entrants",
+            Some(json!({"name": "anon"})),
+            None,
+        )
+        .await;
+    assert_error(s, &v, 429);
+    // The admin has no limit; an entrant it registers registers bots with its key,
+    // which spends nothing of the address's budget.
     let (s, v, _) = server
         .call(Method::POST, "/api/bots", Some(body), Some(ADMIN))
         .await;
     assert_eq!(s, 201, "{v}");
+    let (s, e, _) = server
+        .call(
+            Method::POST,
+            "/api/entrants",
+            Some(json!({"name": "team"})),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 201, "{e}");
+    let key = e["key"].as_str().unwrap();
+    for i in 0..4 {
+        let body = json!({"name": format!("team-{i}"), "command": "python3 simple_bot.py",
+                          "files": simple_bot_files()});
+        let (s, v, _) = server
+            .call(Method::POST, "/api/bots", Some(body), Some(key))
+            .await;
+        assert_eq!(s, 201, "{v}");
+    }
 }
 
 #[tokio::test]

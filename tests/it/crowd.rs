@@ -197,3 +197,116 @@ async fn a_match_lasts_no_longer_than_its_published_ceiling() {
         }
     }
 }
+
+/// A class behind its school's one address (every client of these tests is 127.0.0.1),
+/// with someone guessing among them: wrong invite codes and unknown keys spend the
+/// address's budget and are refused past it, in words a student understands; every
+/// request that proves who it is goes on: the right invite code (on the code's own
+/// budget), the right keys at `/login`, the admin's key, bots registered with an
+/// entrant's key.
+#[tokio::test]
+async fn a_class_behind_one_address_is_never_refused_for_proving_who_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start_env(
+        dir.path(),
+        &["--no-validation"],
+        &[
+            ("MAZEARENA_LOGINS_PER_HOUR", "5"),
+            ("MAZEARENA_REGISTRATIONS_PER_HOUR", "3"),
+            ("MAZEARENA_INVITE_REGISTRATIONS_PER_HOUR", "12"),
+        ],
+    );
+    let (s, v, _) = server
+        .call(
+            reqwest::Method::PUT,
+            "/api/registration",
+            Some(json!({"mode": "invite", "invite_code": "maze-class-2026"})),
+            Some(ADMIN),
+        )
+        .await;
+    assert_eq!(s, 200, "{v}");
+    let register = |name: String, code: &'static str| {
+        let server = &server;
+        async move {
+            server
+                .post(
+                    "/api/entrants",
+                    json!({"name": name, "invite_code": code}),
+                    None,
+                )
+                .await
+        }
+    };
+    // The guesser spends the address's budget of guesses on wrong codes.
+    for i in 0..5 {
+        let (s, v) = register(format!("guess-{i}"), "maze-class-2025").await;
+        assert_eq!(s, 403, "{v}");
+    }
+    let (s, v) = register("guess-5".into(), "maze-class-2025").await;
+    assert_eq!(s, 429, "{v}");
+    let message = v["error"]["message"].as_str().unwrap();
+    assert!(message.contains("your network"), "{message}");
+    assert!(!message.contains("127.0.0.1"), "{message}");
+    // The class registers with the right code, however many, up to the code's own budget.
+    let mut keys = Vec::new();
+    for i in 0..12 {
+        let (s, v) = register(format!("student-{i}"), "maze-class-2026").await;
+        assert_eq!(s, 201, "student {i}: {v}");
+        keys.push(v["key"].as_str().unwrap().to_string());
+    }
+    let (s, v) = register("student-12".into(), "maze-class-2026").await;
+    assert_eq!(s, 429, "{v}");
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("invite code"),
+        "{v}"
+    );
+    // Unknown keys at /login share the address's budget of guesses (used up above).
+    let web = crate::sessions::Web::new(&server);
+    let guess = web
+        .post("/login", None, &[("key", "0123456789abcdef")])
+        .await;
+    assert_eq!(guess.status, 429, "{}", guess.body);
+    // Every student logs in, twice, and so does the admin.
+    for key in keys.iter().chain(keys.iter()) {
+        web.login(key).await;
+    }
+    web.login(ADMIN).await;
+    // Each registers a bot with its key: the address's budgets are not theirs.
+    for (i, key) in keys.iter().enumerate() {
+        let bot = json!({"name": format!("robot-{i}"), "command": "python3 simple_bot.py",
+                         "files": crate::support::simple_bot_files()});
+        let (s, v) = server.post("/api/bots", bot, Some(key)).await;
+        assert_eq!(s, 201, "student {i}: {v}");
+    }
+}
+
+/// The budgets are counted in the database: several API servers of one PostgreSQL
+/// database spend the same ones.
+#[tokio::test]
+async fn the_budgets_are_shared_by_every_api_server_of_a_database() {
+    let Some((url, _)) = crate::faults::postgres("the_budgets_are_shared") else {
+        return;
+    };
+    let database = crate::faults::new_database(&url, "budgets").await;
+    let env = [("MAZEARENA_LOGINS_PER_HOUR", "4")];
+    let (dir_a, dir_b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let a = TestServer::start_on(dir_a.path(), Some(&database), &["--jobs", "0"], &env);
+    let b = TestServer::start_on(dir_b.path(), Some(&database), &["--jobs", "0"], &env);
+    let (web_a, web_b) = (crate::sessions::Web::new(&a), crate::sessions::Web::new(&b));
+    for (i, web) in [&web_a, &web_a, &web_b, &web_b].into_iter().enumerate() {
+        let r = web
+            .post("/login", None, &[("key", &format!("guess-{i}"))])
+            .await;
+        assert_eq!(r.status, 401, "try {i}");
+    }
+    for web in [&web_a, &web_b] {
+        let r = web.post("/login", None, &[("key", "guess-4")]).await;
+        assert_eq!(r.status, 429, "{}", r.body);
+    }
+    // The right key logs in on either.
+    web_a.login(ADMIN).await;
+    web_b.login(ADMIN).await;
+}
