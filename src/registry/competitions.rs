@@ -1335,6 +1335,50 @@ mod tests {
         (e, v)
     }
 
+    /// A close waits for each entered bot's newest version uploaded before it, built
+    /// before anyone else's builds (a flood of uploads outside the competition waits),
+    /// and not for the older versions it supersedes.
+    #[tokio::test]
+    async fn a_close_waits_for_one_build_per_entrant_built_first() {
+        use crate::storage::bots::build_status;
+        use crate::storage::test_support::with_build;
+        for (db, _guard) in backends().await {
+            let now = now_ms();
+            let c = create(&db, spec(now), None).await.unwrap();
+            let (_, v) = entered_bot(&db, &c).await;
+            // Someone floods the builder with bots in no competition first.
+            for i in 0..3 {
+                db.create_bot(&format!("flood-{i}"), "flooder", &with_build())
+                    .await
+                    .unwrap();
+            }
+            // The entrant uploads three versions just before the close.
+            let mut uploaded = Vec::new();
+            for _ in 0..3 {
+                uploaded.push(db.add_bot_version(v.bot_id, &with_build()).await.unwrap());
+            }
+            tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+            let closed = close_now(&db, c, now_ms()).await;
+            // Only the newest holds the close.
+            assert_eq!(db.competition_work_left(&closed).await.unwrap(), 1);
+            // It is built first, ahead of the flood and of the entrant's older ones.
+            let first = db.claim_build("w", 60_000).await.unwrap().unwrap();
+            assert_eq!(first.bot_version_id, uploaded[2].bot_version_id);
+            assert!(
+                db.finish_build(first.bot_version_id, "w", build_status::READY, None, "", 5)
+                    .await
+                    .unwrap()
+            );
+            assert_eq!(db.competition_work_left(&closed).await.unwrap(), 0);
+            // Then the others take turns as usual.
+            let next = db.claim_build("w", 60_000).await.unwrap().unwrap();
+            assert_ne!(
+                next.bot_id, v.bot_id,
+                "the flooder was served least recently"
+            );
+        }
+    }
+
     /// `c` closed at `now`.
     async fn close_now(db: &Storage, c: CompetitionRow, now: i64) -> CompetitionRow {
         let patch = Patch {

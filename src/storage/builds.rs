@@ -24,25 +24,39 @@ pub fn build_retries_exhausted(attempts: i64) -> String {
     )
 }
 
-/// The order in which versions are built ([`Storage::claim_build`]): the oldest
+/// The order in which versions are built ([`Storage::claim_build`]). First the versions
+/// a closed competition waits for before its selection (each entered bot's newest
+/// version uploaded before the close: [`Storage::competition_work_left`]), so that a
+/// close never waits behind other builds; then the rest. In each class, the oldest
 /// waiting version of the owner least recently served (table `queue_lane`, lanes
 /// `build:` and the owner: an entrant, all its bots together, or the owner token of a
 /// bot of no entrant). So a version waits behind at most one build of each other owner
 /// that has versions waiting, however many one owner uploads. `$3` is `building`, `$4`
 /// now: a version whose build's lease is held is not waiting.
 pub const FAIR_BUILD_ORDER: &str = "
-    with heads as (
-        select 'build:' || coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash) as lane,
-            min(v.bot_version_id) as bot_version_id
+    with waiting as (
+        select v.bot_version_id,
+            'build:' || coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash) as lane,
+            case when exists (
+                select 1 from competition_entry e
+                join competition c on c.competition_id = e.competition_id
+                where e.bot_id = v.bot_id and c.kind = 'competition' and c.state is null
+                    and c.closes_at <= $4 and v.bot_version_id >= e.first_version_id
+                    and v.created_at < c.closes_at
+                    and v.bot_version_id = (select max(w.bot_version_id) from bot_version w
+                                            where w.bot_id = v.bot_id and w.created_at < c.closes_at)
+            ) then 0 else 1 end as class
         from bot_version v join bot b on b.bot_id = v.bot_id
         where v.build_status = $3
             and (v.build_lease_expires_at is null or v.build_lease_expires_at < $4)
-        group by 'build:' || coalesce('e:' || cast(b.entrant_id as text), 'o:' || b.owner_token_hash)
+    ), heads as (
+        select lane, class, min(bot_version_id) as bot_version_id
+        from waiting group by lane, class
     )
     select v.bot_version_id from heads h
     join bot_version v on v.bot_version_id = h.bot_version_id
     left join queue_lane l on l.lane = h.lane
-    order by coalesce(l.served, 0), h.bot_version_id";
+    order by h.class, coalesce(l.served, 0), h.bot_version_id";
 
 /// Marks the owner of the version `$1` as served last by the builders.
 const MARK_BUILD_SERVED: &str = "

@@ -985,8 +985,11 @@ impl Storage {
     }
 
     /// How much of a closed competition is still to happen before its selection: matches
-    /// of its tournaments queued or running, and versions uploaded before the close
-    /// still waiting for their build.
+    /// of its tournaments queued or running, and for each entered bot, its newest version
+    /// uploaded before the close if that is still waiting for its build (the builders
+    /// take those first: [`super::builds::FAIR_BUILD_ORDER`]). An older version still
+    /// building is superseded and does not hold the close: an entrant who uploads several
+    /// versions at the deadline holds it for one build at most.
     ///
     /// # Errors
     /// Database failures.
@@ -996,7 +999,9 @@ impl Storage {
                      where t.competition_id = $1 and m.status in ('queued', 'running'))
                   + (select count(*) from bot_version v
                      join competition_entry e on e.bot_id = v.bot_id and v.bot_version_id >= e.first_version_id
-                     where e.competition_id = $1 and v.build_status = 'building' and v.created_at < $2)",
+                     where e.competition_id = $1 and v.build_status = 'building' and v.created_at < $2
+                         and v.bot_version_id = (select max(w.bot_version_id) from bot_version w
+                                                 where w.bot_id = v.bot_id and w.created_at < $2))",
         )
         .bind(c.competition_id)
         .bind(c.closes_at.unwrap_or(0))
