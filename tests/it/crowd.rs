@@ -310,3 +310,160 @@ async fn the_budgets_are_shared_by_every_api_server_of_a_database() {
     web_a.login(ADMIN).await;
     web_b.login(ADMIN).await;
 }
+
+/// The latest version of bot `bot` once its build and validation ended.
+async fn built_version(server: &TestServer, bot: i64, secs: u64) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(secs);
+    loop {
+        let (_, v) = server.get(&format!("/api/bots/{bot}"), None).await;
+        let latest = v["versions"].as_array().unwrap().last().unwrap().clone();
+        if latest["build_status"] != "building" {
+            return latest;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "bot {bot} is still building: {v}"
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+/// One entrant floods the builder with slow builds: it may have three waiting, the
+/// fourth is refused naming them, and another entrant's new version waits behind one
+/// of its builds at most, not all three.
+#[tokio::test]
+async fn one_entrant_flooding_the_builder_holds_another_up_for_one_build_at_most() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start_env(
+        dir.path(),
+        &[],
+        &[("MAZEARENA_PENDING_BUILDS_PER_OWNER", "3")],
+    );
+    let flooder = entrant(&server, "flooder").await;
+    let slow = |name: &str| {
+        json!({"name": name, "command": "python3 simple_bot.py", "build": "sleep 4",
+               "files": crate::support::simple_bot_files()})
+    };
+    let (s, b) = server
+        .post("/api/bots", slow("flood"), Some(&flooder))
+        .await;
+    assert_eq!(s, 201, "{b}");
+    let flood_bot = b["bot_id"].as_i64().unwrap();
+    let path = format!("/api/bots/{flood_bot}/versions");
+    for _ in 0..2 {
+        let (s, v) = server.post(&path, slow("flood"), Some(&flooder)).await;
+        assert_eq!(s, 201, "{v}");
+    }
+    let (s, v, headers) = server
+        .call(
+            reqwest::Method::POST,
+            &path,
+            Some(slow("flood")),
+            Some(&flooder),
+        )
+        .await;
+    assert_eq!(s, 429, "{v}");
+    let message = v["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("3 versions waiting for their build (flood v1, flood v2, flood v3)"),
+        "{message}"
+    );
+    assert!(headers.contains_key("retry-after"));
+    // The builder is on the flooder's first build; another entrant uploads.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let other = entrant(&server, "other").await;
+    let uploaded = Instant::now();
+    let (s, b) = server
+        .post(
+            "/api/bots",
+            json!({"name": "quick", "command": "python3 simple_bot.py", "build": "true",
+                   "files": crate::support::simple_bot_files()}),
+            Some(&other),
+        )
+        .await;
+    assert_eq!(s, 201, "{b}");
+    let quick = built_version(&server, b["bot_id"].as_i64().unwrap(), 120).await;
+    let waited = uploaded.elapsed().as_millis() as i64;
+    assert_eq!(quick["build_status"], "ready", "{quick}");
+    let own = quick["build_ms"].as_i64().unwrap();
+    let flood_v1 = {
+        let (_, v) = server.get(&format!("/api/bots/{flood_bot}"), None).await;
+        v["versions"][0].clone()
+    };
+    // The flooder's first build may still be running when the other is ready: the
+    // other's wait is its own build and the rest of one of the flooder's.
+    let one_flood_build = flood_v1["build_ms"].as_i64().unwrap_or(4_000).max(4_000);
+    eprintln!(
+        "another entrant's version: ready {waited} ms after its upload, its own build and \
+         validation {own} ms, one of the flooder's builds {one_flood_build} ms"
+    );
+    assert!(
+        waited <= own + one_flood_build + 1_500,
+        "waited {waited} ms: more than its own {own} ms and one flood build {one_flood_build} ms"
+    );
+}
+
+/// An owner's uploads of bots in no competition are held by the server's daily quota, a
+/// new bot by its key included; its competition's bot by the competition's quota instead.
+#[tokio::test]
+async fn an_owners_uploads_outside_competitions_have_a_daily_quota() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start_env(
+        dir.path(),
+        &["--no-validation"],
+        &[("MAZEARENA_VERSIONS_PER_DAY", "3")],
+    );
+    let key = entrant(&server, "busy").await;
+    let bot = |name: &str| {
+        json!({"name": name, "command": "python3 simple_bot.py",
+               "files": crate::support::simple_bot_files()})
+    };
+    let (s, b) = server.post("/api/bots", bot("busy-1"), Some(&key)).await;
+    assert_eq!(s, 201, "{b}");
+    let id = b["bot_id"].as_i64().unwrap();
+    let path = format!("/api/bots/{id}/versions");
+    for _ in 0..2 {
+        let (s, v) = server.post(&path, bot("busy-1"), Some(&key)).await;
+        assert_eq!(s, 201, "{v}");
+    }
+    for (path, body) in [(path.as_str(), bot("busy-1")), ("/api/bots", bot("busy-2"))] {
+        let (s, v, headers) = server
+            .call(reqwest::Method::POST, path, Some(body), Some(&key))
+            .await;
+        assert_eq!(s, 429, "{path}: {v}");
+        let message = v["error"]["message"].as_str().unwrap();
+        assert!(
+            message.contains("3 versions of bots that are in no competition"),
+            "{message}"
+        );
+        let wait: u64 = headers["retry-after"].to_str().unwrap().parse().unwrap();
+        assert!((86_000..=86_400).contains(&wait), "{wait}");
+    }
+    // The admin has no quota.
+    let (s, v) = server.post(&path, bot("busy-1"), Some(ADMIN)).await;
+    assert_eq!(s, 201, "{v}");
+    // Entered in a competition, the bot's uploads count on the competition's quota.
+    let start = mazearena::storage::now_ms();
+    competition(
+        &server,
+        json!({
+            "name": "quota-cup", "title": "Quota cup",
+            "opens_at": at(start - 1_000), "closes_at": at(start + 3_600_000),
+            "repeats": 1, "versions_per_day": 2, "practice_per_day": 5,
+            "mazes": {"practice": [maze("q-practice", 12, 4701)],
+                      "public": [maze("q-public", 12, 4702)],
+                      "private": [maze("q-private", 12, 4703)]},
+        }),
+    )
+    .await;
+    let (s, v) = server
+        .post(
+            "/api/competitions/quota-cup/entries",
+            json!({"bot_id": id}),
+            Some(&key),
+        )
+        .await;
+    assert_eq!(s, 201, "{v}");
+    let (s, v) = server.post(&path, bot("busy-1"), Some(&key)).await;
+    assert_eq!(s, 201, "{v}");
+}

@@ -98,6 +98,9 @@ pub struct VersionView {
     pub build_status: String,
     /// When the build ended (unix ms).
     pub built_at: Option<i64>,
+    /// How long its build and validation match took on the builder (ms): spent from its
+    /// owner's daily build minutes, whatever the outcome.
+    pub build_ms: Option<i64>,
     /// The end of the build's output (owner and admin only; the whole log is at
     /// `GET /api/bots/{id}/versions/{version}/build-log`).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -127,6 +130,7 @@ impl From<BotVersionRow> for VersionView {
             build_command: v.build_command,
             build_status: v.build_status,
             built_at: v.built_at,
+            build_ms: v.build_ms,
             build_log_tail: None,
             protocol: crate::runner::BotProtocol::of_stored(v.protocol.as_deref())
                 .as_str()
