@@ -467,3 +467,86 @@ async fn an_owners_uploads_outside_competitions_have_a_daily_quota() {
     let (s, v) = server.post(&path, bot("busy-1"), Some(&key)).await;
     assert_eq!(s, 201, "{v}");
 }
+
+/// A wrong login from `client` to `base`, with extra `headers`: the status.
+async fn wrong_login(client: &reqwest::Client, base: &str, headers: &[(&str, &str)]) -> u16 {
+    let mut r = client
+        .post(format!("{base}/login"))
+        .form(&[("key", "not-a-key-of-anyone")]);
+    for (name, value) in headers {
+        r = r.header(*name, *value);
+    }
+    r.send().await.unwrap().status().as_u16()
+}
+
+/// Behind a real nginx, with `--trusted-proxies` naming it, each client has its own
+/// budget (two clients, 127.0.0.2 and 127.0.0.3); a forged header is ignored both ways:
+/// what a client puts left of nginx's entry, and anything sent straight to the server
+/// by a peer that is not a trusted proxy.
+#[tokio::test]
+async fn behind_nginx_each_client_has_its_own_budget_and_forged_headers_are_ignored() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start_env(
+        dir.path(),
+        &["--jobs", "0", "--trusted-proxies", "127.0.0.1"],
+        &[("MAZEARENA_LOGINS_PER_HOUR", "3")],
+    );
+    let Some(nginx) = crate::support::Nginx::start(&server.base, "behind_nginx") else {
+        return;
+    };
+    let (a, b) = (
+        crate::support::client_from("127.0.0.2"),
+        crate::support::client_from("127.0.0.3"),
+    );
+    for _ in 0..3 {
+        assert_eq!(wrong_login(&a, &nginx.base, &[]).await, 401);
+    }
+    assert_eq!(wrong_login(&a, &nginx.base, &[]).await, 429);
+    // The other client has a budget of its own.
+    assert_eq!(wrong_login(&b, &nginx.base, &[]).await, 401);
+    // A forged entry on the left, or a Forwarded header nginx passes on, changes nothing.
+    assert_eq!(
+        wrong_login(&a, &nginx.base, &[("x-forwarded-for", "127.0.0.9")]).await,
+        429
+    );
+    assert_eq!(
+        wrong_login(&a, &nginx.base, &[("forwarded", "for=127.0.0.9")]).await,
+        429
+    );
+    // Straight to the server, a client is not a trusted proxy: its header is ignored,
+    // whichever address it names.
+    assert_eq!(
+        wrong_login(&a, &server.base, &[("x-forwarded-for", "127.0.0.3")]).await,
+        429
+    );
+    assert_eq!(
+        wrong_login(&b, &server.base, &[("x-forwarded-for", "127.0.0.2")]).await,
+        401
+    );
+    // b has used two of its three; one more through nginx, then it is refused too.
+    assert_eq!(wrong_login(&b, &nginx.base, &[]).await, 401);
+    assert_eq!(wrong_login(&b, &nginx.base, &[]).await, 429);
+}
+
+/// Without `--trusted-proxies`, every client behind nginx is nginx: one client's
+/// guesses use up everyone's budget (why a server behind a proxy must name it).
+#[tokio::test]
+async fn behind_nginx_without_trusted_proxies_everyone_shares_one_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start_env(
+        dir.path(),
+        &["--jobs", "0"],
+        &[("MAZEARENA_LOGINS_PER_HOUR", "2")],
+    );
+    let Some(nginx) = crate::support::Nginx::start(&server.base, "behind_nginx_untrusted") else {
+        return;
+    };
+    let (a, b) = (
+        crate::support::client_from("127.0.0.2"),
+        crate::support::client_from("127.0.0.3"),
+    );
+    for _ in 0..2 {
+        assert_eq!(wrong_login(&a, &nginx.base, &[]).await, 401);
+    }
+    assert_eq!(wrong_login(&b, &nginx.base, &[]).await, 429);
+}
