@@ -21,6 +21,7 @@ mod rankings;
 mod readme;
 mod referee;
 mod runner;
+mod rush;
 mod sessions;
 mod support;
 mod take_part;
