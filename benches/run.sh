@@ -8,8 +8,8 @@
 #   bash benches/run.sh --quick    (a few minutes: fewer runs, smaller databases and
 #                                   samples; to check the scripts, not for the figures)
 #
-# Needs gcc, python3, bubblewrap, wrk and PostgreSQL's server binaries
-# (`apt-get install -y bubblewrap wrk postgresql`),
+# Needs gcc, python3, bubblewrap, wrk, nginx and PostgreSQL's server binaries
+# (`apt-get install -y bubblewrap wrk nginx postgresql`; Locust comes from PyPI),
 # and ../shared/mazes beside the checkout. Run it on a quiet machine:
 # the figures are medians of runs taken in turn, but a busy core still shows.
 set -euo pipefail
@@ -17,10 +17,10 @@ cd "$(dirname "$0")/.."
 QUICK=${1:-}
 if [ "$QUICK" = --quick ]; then
   RUNS=3 STEP_RUNS=3 PAGE_SIZES="1000" PAGE_RUNS=5 EVERY=17 T_RUNS=1 OVERHEAD=5
-  HTTP_ARGS=(1000 1 2) ADAPTER_RUNS=1 WORKER_ARGS=(1 2) IDLE_ARGS=(1 2) CLAIM_RUNS=20 KIT_ARGS=(1 5)
+  HTTP_ARGS=(1000 1 2) RUSH_STUDENTS=30 ADAPTER_RUNS=1 WORKER_ARGS=(1 2) IDLE_ARGS=(1 2) CLAIM_RUNS=20 KIT_ARGS=(1 5)
 else
   RUNS=5 STEP_RUNS=11 PAGE_SIZES="1000 100000 1000000" PAGE_RUNS=21 EVERY=1 T_RUNS=3 OVERHEAD=20
-  HTTP_ARGS=() ADAPTER_RUNS=11 WORKER_ARGS=(3 12) IDLE_ARGS=(3 5) CLAIM_RUNS=200 KIT_ARGS=(3 40)
+  HTTP_ARGS=() RUSH_STUDENTS=300 ADAPTER_RUNS=11 WORKER_ARGS=(3 12) IDLE_ARGS=(3 5) CLAIM_RUNS=200 KIT_ARGS=(3 40)
 fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
@@ -131,6 +131,9 @@ log "the sandbox's cost per match"
 
 log "HTTP under load"
 { bash benches/http.sh "${HTTP_ARGS[@]}"; echo; } >>"$out"
+
+log "the deadline rush"
+{ bash benches/rush.sh "$RUSH_STUDENTS"; echo; } >>"$out"
 
 log "idle connections"
 {
