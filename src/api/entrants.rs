@@ -173,7 +173,7 @@ pub(crate) fn registration_name(r: &Registration) -> &'static str {
         (status = 201, body = EntrantCreated),
         (status = 400, body = ErrorBody), (status = 403, body = ErrorBody),
         (status = 409, body = ErrorBody), (status = 422, body = ErrorBody),
-        (status = 429, body = ErrorBody, description = "too many registrations from this address; see Retry-After"),
+        (status = 429, body = ErrorBody, description = "a budget is used up: registrations without a key from this address, wrong invite codes from it, the invite code's own, or the entrant's quotas (the message says whose); see Retry-After"),
     ))]
 async fn create_entrant(
     State(state): State<AppState>,

@@ -15,7 +15,7 @@ fn blocks(section: &str) -> Vec<String> {
 }
 
 /// The ```LANG blocks of the README section whose heading is `section`.
-fn blocks_of(section: &str, lang: &str) -> Vec<String> {
+pub(crate) fn blocks_of(section: &str, lang: &str) -> Vec<String> {
     let text = std::fs::read_to_string(root().join("README.md")).unwrap();
     let mut out = Vec::new();
     let mut in_section = false;

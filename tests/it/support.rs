@@ -569,8 +569,9 @@ pub fn private_maze_ids(view: &serde_json::Value) -> Vec<i64> {
         .collect()
 }
 
-/// A real nginx (Debian's package) in front of a server, as an operator runs one: it
-/// appends each client's address to `X-Forwarded-For`. Stopped when dropped.
+/// A real nginx (Debian's package) in front of a server, with the README's site for it
+/// (section "Running the server"): it appends each client's address to
+/// `X-Forwarded-For`. Stopped when dropped.
 pub struct Nginx {
     /// `http://127.0.0.1:PORT`.
     pub base: String,
@@ -599,19 +600,19 @@ impl Nginx {
             .local_addr()
             .unwrap()
             .port();
+        // The README's site, on this test's ports.
+        let site = crate::readme::blocks_of("Running the server", "nginx").remove(0);
+        assert!(site.contains("listen 80;") && site.contains("http://127.0.0.1:8080"));
+        let site = site
+            .replace("listen 80;", &format!("listen 127.0.0.1:{port};"))
+            .replace("http://127.0.0.1:8080", upstream);
         let d = dir.path().display();
-        let upstream = upstream.trim_start_matches("http://");
         let config = format!(
             "daemon off;\nworker_processes 1;\npid {d}/nginx.pid;\nerror_log {d}/error.log;\n\
              events {{ worker_connections 1024; }}\n\
              http {{\n  access_log off;\n  client_body_temp_path {d}/body;\n  proxy_temp_path {d}/proxy;\n\
                fastcgi_temp_path {d}/fastcgi;\n  uwsgi_temp_path {d}/uwsgi;\n  scgi_temp_path {d}/scgi;\n\
-               client_max_body_size 64m;\n  upstream mazearena {{ server {upstream}; keepalive 32; }}\n\
-               server {{\n    listen 127.0.0.1:{port};\n    location / {{\n\
-                 proxy_pass http://mazearena;\n      proxy_http_version 1.1;\n\
-                 proxy_set_header Connection \"\";\n      proxy_set_header Host $http_host;\n\
-                 proxy_set_header X-Forwarded-For $proxy_add_x_forwarded_for;\n\
-                 proxy_set_header X-Forwarded-Proto $scheme;\n    }}\n  }}\n}}\n"
+               {site}}}\n"
         );
         let conf = dir.path().join("nginx.conf");
         std::fs::write(&conf, config).unwrap();

@@ -213,8 +213,9 @@ pub struct BotDetail {
     pub versions: Vec<VersionView>,
 }
 
-/// Register a bot with its files; answers its id and owner token (anonymous
-/// registrations are limited per client address: 429 with Retry-After).
+/// Register a bot with its files; answers its id and owner token. Registrations
+/// without a key are limited per client address, an entrant's by its own quotas (429
+/// with Retry-After saying whose).
 #[utoipa::path(post, path = "/api/bots", tag = "bots",
     request_body(content(
         (BotUpload = "application/json"),
@@ -225,7 +226,7 @@ pub struct BotDetail {
         (status = 400, body = ErrorBody), (status = 409, body = ErrorBody),
         (status = 413, body = ErrorBody), (status = 422, body = ErrorBody),
         (status = 403, body = ErrorBody, description = "registration is not open and no entrant's key was given"),
-        (status = 429, body = ErrorBody, description = "too many registrations from this address; see Retry-After"),
+        (status = 429, body = ErrorBody, description = "a budget is used up: registrations without a key from this address, or the entrant's quotas (the message says whose); see Retry-After"),
     ))]
 async fn create_bot(
     State(state): State<AppState>,
