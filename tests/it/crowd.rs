@@ -102,12 +102,12 @@ async fn a_match_lasts_no_longer_than_its_published_ceiling() {
     let dir = tempfile::tempdir().unwrap();
     let server = TestServer::start(dir.path(), &[]);
     let start = mazearena::storage::now_ms();
-    // Ceiling: 2 x (1 s + 999 x 10 ms + 2 s) + 10 s = 35.98 s.
+    // Ceiling: 2 x (1 s + 999 x 20 ms + 2 s) + 10 s = 55.96 s.
     let spec = json!({
         "name": "ceiling", "title": "Ceiling",
         "opens_at": at(start + 2_000), "closes_at": at(start + 3_600_000),
         "repeats": 1, "final_repeats": 1, "versions_per_day": 5, "practice_per_day": 5,
-        "limits": {"move_timeout_ms": 10, "startup_timeout_ms": 1000, "time_bank_ms": 2000},
+        "limits": {"move_timeout_ms": 20, "startup_timeout_ms": 1000, "time_bank_ms": 2000},
         "mazes": {
             "practice": [maze("ceiling-practice", 12, 4601)],
             "public": [maze("ceiling-public", 12, 4602)],
@@ -117,10 +117,10 @@ async fn a_match_lasts_no_longer_than_its_published_ceiling() {
     competition(&server, spec).await;
     let (_, view) = server.get("/api/competitions/ceiling", None).await;
     let ceiling = view["match_wall_clock_ms"].as_u64().unwrap();
-    assert_eq!(ceiling, 35_980, "{view}");
+    assert_eq!(ceiling, 55_960, "{view}");
     let (_, page) = server.get_text("/competitions/ceiling").await;
     assert!(
-        page.contains("the longest a match may last") && page.contains("36 s"),
+        page.contains("the longest a match may last") && page.contains("56 s"),
         "the page does not publish the ceiling"
     );
     let practice = view["mazes"]
@@ -131,24 +131,24 @@ async fn a_match_lasts_no_longer_than_its_published_ceiling() {
         .unwrap()["maze_id"]
         .as_i64()
         .unwrap();
-    // 8 ms of CPU and 32 ms of sleep per move: 40 s for 1000 moves, each answer well
-    // inside its own backstop of 4 x (10 + 8) ms.
+    // 16 ms of CPU and 44 ms of sleep per move: 60 s for 1000 moves, each answer well
+    // inside its own backstop of 4 x (20 + 16) ms.
     let waiter_key = entrant(&server, "waiter").await;
     let waiter = enter(
         &server,
         &waiter_key,
         "ceiling",
-        json!({"name": "waiter", "command": "python3 think_and_wait.py 8 32",
+        json!({"name": "waiter", "command": "python3 think_and_wait.py 16 44",
                "files": fixture_files("think_and_wait.py")}),
     )
     .await;
-    // 9 ms of CPU per move, no sleep: about 9 s of CPU time in all.
+    // 18 ms of CPU per move, no sleep: about 18 s of CPU time in all.
     let thinker_key = entrant(&server, "thinker").await;
     let thinker = enter(
         &server,
         &thinker_key,
         "ceiling",
-        json!({"name": "thinker", "command": "python3 think_and_wait.py 9 0",
+        json!({"name": "thinker", "command": "python3 think_and_wait.py 18 0",
                "files": fixture_files("think_and_wait.py")}),
     )
     .await;
@@ -175,7 +175,7 @@ async fn a_match_lasts_no_longer_than_its_published_ceiling() {
             let id = m["match_id"].as_i64().unwrap();
             let (_, full) = server.get(&format!("/api/matches/{id}"), Some(ADMIN)).await;
             // Practice and ranking alike play under the competition's limits.
-            assert_eq!(full["limits"]["move_timeout_ms"], 10, "{full}");
+            assert_eq!(full["limits"]["move_timeout_ms"], 20, "{full}");
             assert_eq!(full["limits"]["startup_timeout_ms"], 1000, "{full}");
             assert_eq!(full["limits"]["time_bank_ms"], 2000, "{full}");
             assert_eq!(full["limits"]["match_wall_clock_ms"], ceiling, "{full}");
