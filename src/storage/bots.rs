@@ -172,22 +172,7 @@ impl Storage {
         first: &NewVersion<'_>,
     ) -> Result<BotVersionRow> {
         let mut tx = self.begin_write().await?;
-        let now = now_ms();
-        let bot_id: i64 = sqlx::query_scalar(
-            "insert into bot (name, owner_token_hash, created_at) values ($1, $2, $3) returning bot_id",
-        )
-        .bind(name)
-        .bind(owner_token_hash)
-        .bind(now)
-        .fetch_one(&mut *tx)
-        .await
-        .map_err(|e| {
-            if is_unique_violation(&e) {
-                StorageError::Conflict(format!("a bot named {name:?} exists already"))
-            } else {
-                e.into()
-            }
-        })?;
+        let bot_id = insert_bot(&mut tx, name, owner_token_hash, None).await?;
         let row = insert_version(&mut tx, bot_id, first).await?;
         tx.commit().await?;
         Ok(row)
@@ -214,24 +199,7 @@ impl Storage {
             tx.rollback().await?;
             return Ok(Err(VersionRefusal::Owner(kind, usage)));
         }
-        let now = now_ms();
-        let bot_id: i64 = sqlx::query_scalar(
-            "insert into bot (name, owner_token_hash, created_at, entrant_id)
-             values ($1, $2, $3, $4) returning bot_id",
-        )
-        .bind(name)
-        .bind(owner_token_hash)
-        .bind(now)
-        .bind(entrant)
-        .fetch_one(&mut *tx)
-        .await
-        .map_err(|e| {
-            if is_unique_violation(&e) {
-                StorageError::Conflict(format!("a bot named {name:?} exists already"))
-            } else {
-                e.into()
-            }
-        })?;
+        let bot_id = insert_bot(&mut tx, name, owner_token_hash, entrant).await?;
         let row = insert_version(&mut tx, bot_id, first).await?;
         tx.commit().await?;
         Ok(Ok(row))
@@ -527,6 +495,33 @@ async fn resume_in(tx: &mut sqlx::AnyConnection, bot_id: i64) -> Result<bool> {
     .execute(tx)
     .await?;
     Ok(done.rows_affected() == 1)
+}
+
+/// Inserts bot `name` (of `entrant`, if given); its id. A taken name is a
+/// [`StorageError::Conflict`].
+async fn insert_bot(
+    tx: &mut sqlx::AnyConnection,
+    name: &str,
+    owner_token_hash: &str,
+    entrant: Option<i64>,
+) -> Result<i64> {
+    sqlx::query_scalar(
+        "insert into bot (name, owner_token_hash, created_at, entrant_id)
+         values ($1, $2, $3, $4) returning bot_id",
+    )
+    .bind(name)
+    .bind(owner_token_hash)
+    .bind(now_ms())
+    .bind(entrant)
+    .fetch_one(tx)
+    .await
+    .map_err(|e| {
+        if is_unique_violation(&e) {
+            StorageError::Conflict(format!("a bot named {name:?} exists already"))
+        } else {
+            e.into()
+        }
+    })
 }
 
 async fn insert_version(

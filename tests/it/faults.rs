@@ -123,13 +123,7 @@ fn spawn(args: &[String], log: &Path) -> Child {
 }
 
 /// A free local port.
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
+pub(crate) use crate::support::free_port;
 
 /// The PostgreSQL cluster of the tests (`.ci/postgres.sh`): its URL and folder, or
 /// `None` after saying why the test is skipped (outside CI; in CI it fails).

@@ -225,11 +225,7 @@ async fn the_readme_scale_out_example_runs_as_written_on_postgresql() {
     };
     let database = crate::faults::new_database(&url, "readme").await;
     let dir = tempfile::tempdir().unwrap();
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = crate::support::free_port();
     let block = blocks("Scaling out: PostgreSQL, API servers and workers").remove(0);
     let cmds = commands(&block);
     assert_eq!(cmds.len(), 2, "{block}");

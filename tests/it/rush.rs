@@ -78,6 +78,18 @@ impl Student {
         (status, body)
     }
 
+    /// GET `path` of the API with `key`: its JSON.
+    async fn api(&self, path: &str, key: &str) -> Value {
+        let r = self.http.get(format!("{}{path}", self.base));
+        r.bearer_auth(key)
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap()
+    }
+
     async fn get(&mut self, what: &str, path: &str) -> (u16, String) {
         let r = self.http.get(format!("{}{path}", self.base));
         self.send(what, r).await
@@ -149,18 +161,7 @@ impl Student {
             return self.report;
         }
         // Ready: the student's page says so (the API, with the key, for the test).
-        let api = |path: String| {
-            self.http
-                .get(format!("{}{path}", self.base))
-                .bearer_auth(&key)
-        };
-        let me: Value = api("/api/me".into())
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let me = self.api("/api/me", &key).await;
         let Some(bot) = me["bots"][0]["bot_id"].as_i64() else {
             self.report
                 .failures
@@ -169,13 +170,7 @@ impl Student {
         };
         let deadline = Instant::now() + Duration::from_secs(600);
         loop {
-            let v: Value = api(format!("/api/bots/{bot}"))
-                .send()
-                .await
-                .unwrap()
-                .json()
-                .await
-                .unwrap();
+            let v = self.api(&format!("/api/bots/{bot}"), &key).await;
             match v["versions"][0]["build_status"].as_str() {
                 Some("ready") => break,
                 Some("building") if Instant::now() < deadline => {}

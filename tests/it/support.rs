@@ -595,11 +595,7 @@ impl Nginx {
             return None;
         };
         let dir = tempfile::tempdir().unwrap();
-        let port = std::net::TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
+        let port = free_port();
         // The README's site, on this test's ports.
         let site = crate::readme::blocks_of("Running the server", "nginx").remove(0);
         assert!(site.contains("listen 80;") && site.contains("http://127.0.0.1:8080"));
@@ -661,4 +657,13 @@ pub fn client_from(address: &str) -> reqwest::Client {
         .redirect(reqwest::redirect::Policy::none())
         .build()
         .unwrap()
+}
+
+/// A TCP port free on 127.0.0.1 now.
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
 }
