@@ -119,6 +119,33 @@ pub fn refusal(
     }
 }
 
+/// What an owner has used of `quotas` (its `usage` over the last 24 hours), in words for
+/// its page; `None` when the server sets none.
+pub fn summary(quotas: &OwnerQuotas, usage: &OwnerUsage) -> Option<String> {
+    let mut parts = Vec::new();
+    if quotas.pending_builds > 0 {
+        parts.push(format!(
+            "{} of {} versions waiting for their build",
+            usage.pending.len(),
+            quotas.pending_builds
+        ));
+    }
+    if quotas.build_minutes_per_day > 0 {
+        parts.push(format!(
+            "{:.1} of {} build minutes used in the last 24 hours",
+            usage.build_ms as f64 / 60_000.0,
+            quotas.build_minutes_per_day
+        ));
+    }
+    if quotas.versions_per_day > 0 {
+        parts.push(format!(
+            "{} of {} versions of bots in no competition in the last 24 hours",
+            usage.versions_outside, quotas.versions_per_day
+        ));
+    }
+    (!parts.is_empty()).then(|| format!("Your uploads: {}.", parts.join("; ")))
+}
+
 /// Refuses one more version under `limits` at `now` when a quota is used up (the
 /// early check, before the upload's files are read; the transaction that stores the
 /// version counts again).
@@ -184,5 +211,13 @@ mod tests {
         }
         .limits(Owner::Entrant(4), true, now);
         assert_eq!(none.refusal(&usage), None);
+        assert_eq!(
+            summary(&q, &usage).as_deref(),
+            Some(
+                "Your uploads: 3 of 3 versions waiting for their build; 61.0 of 60 build \
+                 minutes used in the last 24 hours; 20 of 20 versions of bots in no \
+                 competition in the last 24 hours."
+            )
+        );
     }
 }

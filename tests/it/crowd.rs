@@ -369,6 +369,14 @@ async fn one_entrant_flooding_the_builder_holds_another_up_for_one_build_at_most
         "{message}"
     );
     assert!(headers.contains_key("retry-after"));
+    // The flooder's page says what it has used.
+    let web = crate::sessions::Web::new(&server);
+    let session = web.login(&flooder).await;
+    let page = web.get("/me", Some(&session)).await.body;
+    assert!(
+        page.contains("Your uploads: 3 of 3 versions waiting for their build"),
+        "{page}"
+    );
     // The builder is on the flooder's first build; another entrant uploads.
     tokio::time::sleep(Duration::from_millis(500)).await;
     let other = entrant(&server, "other").await;

@@ -82,7 +82,7 @@ impl Web {
         }
     }
 
-    async fn get(&self, path: &str, session: Option<&str>) -> Answer {
+    pub(crate) async fn get(&self, path: &str, session: Option<&str>) -> Answer {
         let mut r = self.http.get(format!("{}{path}", self.base));
         if let Some(s) = session {
             r = r.header("cookie", format!("mazearena_session={s}"));

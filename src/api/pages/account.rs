@@ -289,6 +289,23 @@ pub(super) async fn me_page(State(state): State<AppState>, visitor: Visitor) -> 
     }
     matches.sort_by_key(|m| std::cmp::Reverse(m.match_id));
     matches.truncate(MY_MATCHES as usize);
+    // The server's quotas on the visitor's uploads (an entrant's, or a bot owner's).
+    let owner = match caller {
+        Caller::Token(hash) => match state.storage.entrant_by_key(hash).await? {
+            Some(e) => Some(crate::storage::owners::Owner::Entrant(e.entrant_id)),
+            None if !owned.is_empty() => Some(crate::storage::owners::Owner::Token(hash.clone())),
+            None => None,
+        },
+        _ => None,
+    };
+    let uploads_quota = match owner {
+        Some(o) => {
+            let since = crate::storage::now_ms() - crate::competition::DAY_MS;
+            let usage = state.storage.owner_usage(&o, since).await?;
+            crate::registry::owners::summary(&state.settings.owner_quotas, &usage)
+        }
+        None => None,
+    };
     live |= matches
         .iter()
         .any(|m| matches!(m.status.to_string().as_str(), "queued" | "running"));
@@ -305,6 +322,7 @@ pub(super) async fn me_page(State(state): State<AppState>, visitor: Visitor) -> 
         bots,
         matches: matches.into_iter().map(super::line).collect(),
         live,
+        uploads_quota,
     };
     Ok(Html(account::me(&page)).into_response())
 }

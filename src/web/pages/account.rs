@@ -193,6 +193,8 @@ pub struct MePage {
     pub matches: Vec<MatchLine>,
     /// Something is building or playing: the page reloads itself.
     pub live: bool,
+    /// What the visitor has used of the server's quotas on uploads, in words.
+    pub uploads_quota: Option<String>,
 }
 
 /// The "me" page.
@@ -216,6 +218,7 @@ pub fn me(p: &MePage) -> String {
         }
         @if let Some(n) = &p.notice { p.notice role="status" { (n) } }
         @if p.live { p.muted.live { "Something is building or playing: this page reloads every 5 seconds." } }
+        @if let Some(q) = &p.uploads_quota { p.quota.uploads { (q) } }
         @if p.kind == "admin" || p.kind == "organiser" {
             h2 { "Organising" }
             ul {
