@@ -55,13 +55,12 @@ impl FloodMeter {
 
     /// What the step being asked has been charged so far, in µs.
     pub fn step_charge_us(&self) -> u64 {
-        match (
-            self.charging_since,
-            self.charging_since.and(thread_cpu_us()),
-        ) {
-            (Some(since), Some(now)) => now.saturating_sub(since),
-            _ => 0,
-        }
+        // The clock is read only while the step is being charged: a quiet step costs
+        // no system call.
+        let Some(since) = self.charging_since else {
+            return 0;
+        };
+        thread_cpu_us().map_or(0, |now| now.saturating_sub(since))
     }
 
     /// The step was answered: its charge (µs), added to the match's.
