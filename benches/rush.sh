@@ -143,6 +143,7 @@ PY
   fi
   stop_all
   cp "$run/locust_stats.csv" "$WORK/$label.csv"
+  cp "$run/locust_failures.csv" "$WORK/$label-failures.csv"
 }
 
 run one-address no "" "$STUDENTS" yes yes
@@ -193,4 +194,15 @@ def count(label, name):
 print("| students ready (of each run's) | " + " | ".join(cell(l, ready, "Request Count") for l in runs) + " |")
 print("| right keys or codes refused (must be 0) | " + " | ".join(count(l, "refused right key") for l in runs) + " |")
 print("| uploads lost (must be 0) | " + " | ".join(count(l, "lost upload") for l in runs) + " |")
+print("| students stopped before the end | " + " | ".join(count(l, "stopped") for l in runs) + " |")
+for label in runs:
+    with open(f"{work}/{label}-failures.csv") as f:
+        failures = [r for r in csv.DictReader(f)]
+    if failures:
+        print()
+        print(f"Failures in the {label} run (Locust's: a request whose answer was an error, and each")
+        print("student stopped, with its step and HTTP status):")
+        print()
+        for r in failures:
+            print(f"- {r['Method']} {r['Name']}: {r['Error']} ({r['Occurrences']} times)")
 PY

@@ -15,7 +15,9 @@ Besides the requests (named by route), it reports as request type RUSH:
   "upload to ready"   the time from the upload's answer to the version's `ready`;
   "refused right key" a 429 answer to a request that proved who it was (must not happen);
   "lost upload"       an upload answered 303 whose version never appeared or never got
-                      ready (must not happen).
+                      ready (must not happen);
+  "stopped"           a student who could not go on (an answer that was not the one a
+                      browser expects: its step and HTTP status, in the failures).
 """
 
 import itertools
@@ -91,6 +93,12 @@ class Student(HttpUser):
     def refused(self, what):
         self.report("refused right key", time.time(), Exception(what))
 
+    def stopped(self, what, response=None):
+        """Reports why this student stops before the end, and stops it."""
+        status = getattr(response, "status_code", None)
+        self.report("stopped", time.time(), Exception(f"{what}: HTTP {status}"))
+        raise StopUser()
+
     def lost(self, what):
         self.report("lost upload", time.time(), Exception(what))
 
@@ -113,7 +121,7 @@ class Student(HttpUser):
         )
         m = re.search(r'id="new-key">([0-9a-f]+)<', r.text)
         if r.status_code != 200 or not m:
-            raise StopUser()
+            self.stopped("registration", r)
         key = m.group(1)
         r = self.checked(
             self.client.post(
@@ -122,7 +130,7 @@ class Student(HttpUser):
             "login with the right key",
         )
         if r.status_code != 303:
-            raise StopUser()
+            self.stopped("login", r)
         r = self.checked(
             self.client.get(
                 f"/competitions/{COMPETITION}/submit", name="GET /competitions/[c]/submit"
@@ -131,7 +139,7 @@ class Student(HttpUser):
         )
         token = csrf(r.text)
         if not token:
-            raise StopUser()
+            self.stopped("the submission form", r)
         r = self.checked(
             self.client.post(
                 f"/competitions/{COMPETITION}/submit",
@@ -143,7 +151,7 @@ class Student(HttpUser):
             "the upload",
         )
         if r.status_code != 303:
-            raise StopUser()
+            self.stopped("the upload", r)
         uploaded = time.time()
         headers = {"authorization": f"Bearer {key}"}
         me = self.client.get("/api/me", headers=headers, name="GET /api/me").json()
@@ -169,7 +177,7 @@ class Student(HttpUser):
             token = csrf(page)
             maze = re.search(r'name="maze_id"[^>]*>\s*<option value="(\d+)"', page)
             if not token or not maze:
-                raise StopUser()
+                self.stopped("the practice button", None)
             r = self.checked(
                 self.client.post(
                     "/me/practice",
@@ -181,7 +189,7 @@ class Student(HttpUser):
             )
             location = r.headers.get("location", "")
             if r.status_code != 303 or not location.startswith("/matches/"):
-                raise StopUser()
+                self.stopped("practice", r)
             matches.append(location.rsplit("/", 1)[1])
         for match in matches:
             while True:
