@@ -2,13 +2,18 @@
 //! build command (one build at a time per pool; a claim is a lease in the database, so
 //! each version is built once, by one worker of one machine), runs the build in the
 //! sandbox (`runner::build`) in a fresh folder holding the version's bundle, stores the
-//! built folder as a bundle of its own, plays the version's **validation match** (one
-//! short match on a public generated maze, like a validation episode: a version that
-//! crashes, times out or breaks the protocol there could not play any match), and
-//! records the result: `ready` versions play from the built bundle on every worker,
-//! `build_failed` and `invalid` ones never play (nor count against a quota), and their
-//! owner reads why in the build log. Versions uploaded without a build command are only
-//! validated. A build whose worker died is claimed again once its lease expires.
+//! built folder as a bundle of its own, plays the version's **validation match** (short
+//! matches on public mazes, like a validation episode), and records the result: `ready`
+//! versions play from the built bundle on every worker, `build_failed` and `invalid`
+//! ones never play (nor count against a quota), and their owner reads why in the build
+//! log. By the competition's rule ([`Validation`]): with `start` (the default, and
+//! outside competitions) a version is invalid only when it fails before its first move
+//! on every maze it is tried on, a failure no maze causes (it does not start, needs
+//! another runtime or protocol); a failure on one maze, or after the first move, is a
+//! warning in the log and the version plays. With `match` any failure on the first
+//! practice maze makes it invalid; `off` plays no validation match. Versions uploaded
+//! without a build command are only validated. A build whose worker died is claimed
+//! again once its lease expires.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -17,6 +22,7 @@ use std::time::Duration;
 use tokio::sync::Notify;
 use tokio_util::sync::CancellationToken;
 
+use crate::competition::Validation;
 use crate::registry::{self, RegistryError};
 use crate::runner::{BotSpec, Limits, MatchStatus, Sandbox, build};
 use crate::storage::Storage;
@@ -31,9 +37,12 @@ const POLL: Duration = Duration::from_secs(2);
 /// time, is not held long by a slow bot.
 const VALIDATION_STEPS: u32 = 20;
 
-/// The validation match's maze outside competitions: generated (public, the same for
-/// every version).
-const VALIDATION_MAZE: (u32, u64) = (12, 20_260_101);
+/// The size of the validation maze of a protocol-v1 bot outside competitions (an mms
+/// mouse's is 16x16, the size such mice are written for).
+const VALIDATION_DIM: u32 = 12;
+
+/// The seed of the generated validation mazes (public, the same for every version).
+const VALIDATION_SEED: u64 = 20_260_101;
 
 /// What a pool's builder needs.
 #[derive(Debug, Clone)]
@@ -256,10 +265,61 @@ impl Builder {
     }
 }
 
+/// One validation match played: where, and how it ended.
+struct Tried {
+    /// The maze in words.
+    place: String,
+    /// The record.
+    record: crate::runner::MatchRecord,
+}
+
+impl Tried {
+    /// Whether the bot played without a fault (the steps ran out or it finished).
+    fn passed(&self) -> bool {
+        matches!(
+            self.record.status,
+            MatchStatus::Finished | MatchStatus::StepLimit
+        )
+    }
+
+    /// Whether it failed before its first move (the first step asked and not answered,
+    /// or before it: it never made a move).
+    fn failed_before_first_move(&self) -> bool {
+        !self.passed()
+            && self
+                .record
+                .error
+                .as_ref()
+                .and_then(|e| e.step)
+                .is_none_or(|step| step <= 1)
+    }
+
+    /// What happened, for the owner: where, the status and reason, the end of its
+    /// stderr (a traceback), and a hint.
+    fn told(&self, command: &str) -> String {
+        let status = self.record.status;
+        let reason = self
+            .record
+            .error
+            .as_ref()
+            .map_or_else(|| status.to_string(), |e| e.reason.clone());
+        let mut text = format!("[validation match on {}: {status}: {reason}]\n", self.place);
+        let tail = self.record.stderr_tail.trim_end();
+        if !tail.is_empty() {
+            text.push_str(&format!("--- the end of its stderr ---\n{tail}\n"));
+        }
+        if let Some(hint) = validation_hint(command, tail) {
+            text.push_str(&format!("hint: {hint}\n"));
+        }
+        text
+    }
+}
+
 impl Builder {
-    /// Plays the validation match of `version` from its folder `dir`: `ready`, or
-    /// `invalid` when the bot crashed, timed out or broke the protocol, with `log` and
-    /// what happened added to it (the reason, the end of its stderr, a hint).
+    /// Validates `version` from its folder `dir` as its competition (or the server)
+    /// says ([`Validation`]): `ready`, or `invalid`, with `log` and what happened added
+    /// to it (the reason, the end of its stderr, a hint; a warning for a failure that
+    /// does not make it invalid).
     async fn validate(
         &self,
         version: &BotVersionRow,
@@ -269,9 +329,70 @@ impl Builder {
         if !self.validate {
             return (build_status::READY, log);
         }
-        let Some((maze, limits, place)) = self.validation_setting(version).await else {
+        let Some(plan) = self.validation_plan(version).await else {
             return (build_status::READY, log);
         };
+        if plan.mode == Validation::Off {
+            return (build_status::READY, log);
+        }
+        if !log.is_empty() && !log.ends_with('\n') {
+            log.push('\n');
+        }
+        let mut tried: Vec<Tried> = Vec::new();
+        for (maze, place) in plan.mazes {
+            let Some(record) = self.play_validation(version, dir, maze, plan.limits).await else {
+                // The server could not play it (logged): the version is not held up.
+                return (build_status::READY, log);
+            };
+            let t = Tried { place, record };
+            let done =
+                t.passed() || !t.failed_before_first_move() || plan.mode == Validation::Match;
+            tried.push(t);
+            if done {
+                break;
+            }
+        }
+        let Some(last) = tried.last() else {
+            return (build_status::READY, log);
+        };
+        if last.passed() {
+            for t in &tried[..tried.len() - 1] {
+                log.push_str(&t.told(&version.command));
+            }
+            if tried.len() > 1 {
+                log.push_str("warning: it failed before its first move on the mazes above, but played on the next: it is ready and plays; it may fail the same way on some of the mazes it plays.\n");
+            }
+            log.push_str(&format!(
+                "[validation match: played {} steps on {} without a fault]",
+                last.record.total_steps, last.place
+            ));
+            return (build_status::READY, log);
+        }
+        for t in &tried {
+            log.push_str(&t.told(&version.command));
+        }
+        if plan.mode == Validation::Start && !last.failed_before_first_move() {
+            log.push_str("warning: it failed on that maze after its first move (an error inside the bot on that maze, not one at its start): it is ready and plays, and it may fail the same way on other mazes.");
+            return (build_status::READY, log);
+        }
+        if plan.mode == Validation::Start {
+            log.push_str("It failed before its first move on every maze it was tried on (it does not start, or needs another runtime or protocol). ");
+        }
+        log.push_str(
+            "This version is invalid: it will not play, and it does not count against your quota.",
+        );
+        (build_status::INVALID, log)
+    }
+
+    /// Plays one validation match of `version` on `maze` (at most [`VALIDATION_STEPS`]
+    /// steps under `limits`); `None` if the server could not play it (logged).
+    async fn play_validation(
+        &self,
+        version: &BotVersionRow,
+        dir: &std::path::Path,
+        maze: crate::engine::Maze,
+        limits: Limits,
+    ) -> Option<crate::runner::MatchRecord> {
         let bot = BotSpec {
             command: version.command.clone(),
             dir: dir.to_path_buf(),
@@ -301,100 +422,102 @@ impl Builder {
             )))
         })
         .await;
-        let record = match played {
-            Ok(Ok(r)) => r,
+        match played {
+            Ok(Ok(r)) => Some(r),
             Ok(Err(e)) => {
                 tracing::error!(cause = %e, "cannot play a validation match");
-                return (build_status::READY, log);
+                None
             }
             Err(e) => {
                 tracing::error!(cause = %e, "a validation match failed");
-                return (build_status::READY, log);
-            }
-        };
-        if !log.is_empty() && !log.ends_with('\n') {
-            log.push('\n');
-        }
-        match record.status {
-            MatchStatus::Finished | MatchStatus::StepLimit => {
-                log.push_str(&format!(
-                    "[validation match: played {} steps on {place} without a fault]",
-                    record.total_steps
-                ));
-                (build_status::READY, log)
-            }
-            status => {
-                let reason = record
-                    .error
-                    .as_ref()
-                    .map_or_else(|| status.to_string(), |e| e.reason.clone());
-                log.push_str(&format!(
-                    "[validation match on {place}: {status}: {reason}]\n"
-                ));
-                let tail = record.stderr_tail.trim_end();
-                if !tail.is_empty() {
-                    log.push_str(&format!("--- the end of its stderr ---\n{tail}\n"));
-                }
-                if let Some(hint) = validation_hint(&version.command, tail) {
-                    log.push_str(&format!("hint: {hint}\n"));
-                }
-                log.push_str("This version is invalid: it will not play, and it does not count against your quota.");
-                (build_status::INVALID, log)
+                None
             }
         }
     }
 }
 
+/// How a version is validated: the rule, the mazes in the order they are tried, the
+/// limits.
+struct Plan {
+    mode: Validation,
+    mazes: Vec<(crate::engine::Maze, String)>,
+    limits: Limits,
+}
+
+/// A generated public validation maze of size `dim`, and its description.
+fn generated(dim: u32) -> Option<(crate::engine::Maze, String)> {
+    crate::engine::generator::generate(dim, VALIDATION_SEED)
+        .map(|m| (m, format!("a public generated {dim}x{dim} maze")))
+        .map_err(|e| tracing::error!(cause = %e, "cannot make a validation maze"))
+        .ok()
+}
+
+/// The size of another generated maze after a failure on mazes of size `dim`.
+fn other_size(dim: u32) -> u32 {
+    if dim == 16 { 12 } else { 16 }
+}
+
 impl Builder {
-    /// Where and how `version` plays its validation match: for a bot entered in a
-    /// competition, the competition's first practice maze (public, of its size) under
-    /// its limits; otherwise a generated public maze under the server's limits. Also
-    /// the maze's description for the log. `None` if no maze can be had (the generator
-    /// failed: a bug, logged, and the version is not held up by it).
-    async fn validation_setting(
-        &self,
-        version: &BotVersionRow,
-    ) -> Option<(crate::engine::Maze, Limits, String)> {
-        let generated = || {
-            let (dim, seed) = VALIDATION_MAZE;
-            crate::engine::generator::generate(dim, seed).map(|m| {
-                (
-                    m,
-                    Limits::default(),
-                    format!("a public generated {dim}x{dim} maze"),
-                )
-            })
+    /// Where and how `version` is validated: for a bot entered in a competition, by the
+    /// competition's rule, on its practice mazes (public; with `match`, the first only)
+    /// and then a generated maze of another size, under its limits; otherwise by
+    /// `start` on a generated maze of the size its protocol plays (16x16 for an mms
+    /// mouse, 12x12 else) and then one of the other size, under the server's limits.
+    /// `None` if no maze can be had (the generator failed: a bug, logged, and the
+    /// version is not held up by it).
+    async fn validation_plan(&self, version: &BotVersionRow) -> Option<Plan> {
+        let protocol = crate::runner::BotProtocol::of_stored(version.protocol.as_deref());
+        let dim = if protocol == crate::runner::BotProtocol::Mms {
+            16
+        } else {
+            VALIDATION_DIM
         };
         let competitions = self
             .storage
             .competitions_of_bot(version.bot_id)
             .await
             .unwrap_or_default();
-        for c in competitions.iter().filter(|c| c.kind != "default") {
+        if let Some(c) = competitions.iter().find(|c| c.kind != "default") {
+            let mode = Validation::parse(&c.validation);
             let limits = c.limit_set().apply(Limits::default());
-            let mazes = self
+            let mut mazes = Vec::new();
+            for m in self
                 .storage
                 .competition_mazes(c.competition_id)
                 .await
-                .unwrap_or_default();
-            if let Some(m) = mazes.iter().find(|m| m.maze_set == "practice")
-                && let Ok(Some(row)) = self.storage.get_maze(m.maze_id).await
-                && !row.hidden
-                && let Ok(maze) = crate::engine::mazefile::parse(row.layout.as_bytes())
+                .unwrap_or_default()
+                .iter()
+                .filter(|m| m.maze_set == "practice")
             {
-                return Some((
-                    maze,
-                    limits,
-                    format!("the practice maze {} of competition {}", row.name, c.name),
-                ));
+                if let Ok(Some(row)) = self.storage.get_maze(m.maze_id).await
+                    && !row.hidden
+                    && let Ok(maze) = crate::engine::mazefile::parse(row.layout.as_bytes())
+                {
+                    let place = format!("the practice maze {} of competition {}", row.name, c.name);
+                    mazes.push((maze, place));
+                }
             }
-            if let Ok((maze, _, place)) = generated() {
-                return Some((maze, limits, place));
+            if mazes.is_empty() {
+                mazes.extend(generated(dim));
             }
+            if mode == Validation::Match {
+                mazes.truncate(1);
+            } else if let Some(first) = mazes.first().map(|(m, _)| m.dim()) {
+                mazes.extend(generated(other_size(first)));
+            }
+            return (!mazes.is_empty()).then_some(Plan {
+                mode,
+                mazes,
+                limits,
+            });
         }
-        generated()
-            .map_err(|e| tracing::error!(cause = %e, "cannot make the validation maze"))
-            .ok()
+        let mut mazes: Vec<_> = generated(dim).into_iter().collect();
+        mazes.extend(generated(other_size(dim)));
+        (!mazes.is_empty()).then_some(Plan {
+            mode: Validation::Start,
+            mazes,
+            limits: Limits::default(),
+        })
     }
 }
 

@@ -259,6 +259,10 @@ pub struct CompetitionView {
     pub max_selected: i64,
     /// Whether the private mazes are shown with the results.
     pub reveal_private_mazes: bool,
+    /// How each new version is checked before it plays: `start` (invalid only for a
+    /// failure that no maze causes), `match` (invalid for any failure in its validation
+    /// match) or `off`.
+    pub validation: String,
     /// The match limits (those left out are the server's).
     pub limits: Limits,
     /// The longest one of its matches may last, in wall-clock ms (null without time
@@ -275,7 +279,15 @@ pub struct CompetitionView {
     pub seeds: Option<Vec<i64>>,
     /// The public set's tournament (its matches show how each went, not the scores).
     pub public_tournament_id: Option<i64>,
-    /// After the close: how far the final run (the private set's only run) has played.
+    /// Its own invite code, for its organisers (none: it has none, or the caller is not
+    /// one of them).
+    pub invite_code: Option<String>,
+    /// The competition's link that carries its invite code (a path on this server), for
+    /// its organisers: give it to the class.
+    pub invite_link: Option<String>,
+    /// After the close: how far the final run (the private set's only run) has played,
+    /// for the competition's organisers, and for everyone once the results are written
+    /// (while it plays, `state` is `final_run`).
     pub final_run: Option<ops::RunProgress>,
 }
 
@@ -324,6 +336,7 @@ pub(super) async fn view(
         selection: c.selection.clone(),
         max_selected: c.max_selected,
         reveal_private_mazes: c.reveal_private_mazes,
+        validation: c.validation.clone(),
         limits: c.limit_set(),
         match_wall_clock_ms: c
             .limit_set()
@@ -338,7 +351,13 @@ pub(super) async fn view(
             .len(),
         seeds,
         public_tournament_id: c.public_tournament_id,
-        final_run: ops::final_progress(&state.storage, c).await?,
+        final_run: ops::progress_for(c, ops::final_progress(&state.storage, c).await?, organiser),
+        invite_code: c.invite_code.clone().filter(|_| organiser),
+        invite_link: c
+            .invite_code
+            .as_deref()
+            .filter(|_| organiser)
+            .map(|code| crate::registry::invites::link(c, code)),
     })
 }
 
@@ -605,6 +624,7 @@ pub(super) async fn default_board(
         sealed: false,
         frozen_at: None,
         final_run: None,
+        final_run_playing: false,
         standings: rows
             .into_iter()
             .map(|r| BoardLine {
@@ -851,9 +871,9 @@ async fn final_results(
     if c.state.as_deref() != Some("final") {
         let progress = ops::final_progress(&state.storage, &c).await?;
         return Err(ApiError::Conflict(match (c.closes_at, progress) {
-            (_, Some(p)) => format!(
-                "the final run of competition {} is playing: {} of {} matches played; the results come when it has played",
-                c.name, p.played, p.total
+            (_, Some(_)) => format!(
+                "the final run of competition {} is playing; the results come when it has played",
+                c.name
             ),
             (Some(t), None) => format!(
                 "the results of competition {} come after its close ({}) and its final run",

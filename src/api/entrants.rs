@@ -11,7 +11,7 @@ use utoipa_axum::routes;
 
 use super::AppState;
 use super::auth::{Caller, hash_token, new_token};
-use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
+use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
 use crate::storage::entrants::Registration;
 
 /// The most members an entrant lists, and the longest member name.
@@ -20,7 +20,7 @@ const MAX_MEMBER_CHARS: usize = 100;
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
-        .routes(routes!(create_entrant))
+        .routes(routes!(create_entrant, list_entrants))
         .routes(routes!(get_entrant))
         .routes(routes!(rotate_key))
         .routes(routes!(get_registration, set_registration))
@@ -36,7 +36,9 @@ pub struct EntrantRequest {
     /// The members' names (at most 20).
     #[serde(default)]
     pub members: Vec<String>,
-    /// The invite code, when registration is by invite.
+    /// The invite code: the server's, when registration is by invite, or a
+    /// competition's own (which registers whatever the server's mode and leads to that
+    /// competition).
     pub invite_code: Option<String>,
 }
 
@@ -50,6 +52,9 @@ pub struct EntrantCreated {
     /// The entrant's key: acts for every bot registered with it (`Authorization: Bearer
     /// KEY`). Shown once; keep it.
     pub key: String,
+    /// The competition whose invite code it registered with (its short name), if any:
+    /// where to submit a bot next.
+    pub competition: Option<String>,
 }
 
 /// An entrant as anyone sees it.
@@ -209,40 +214,85 @@ pub(crate) async fn register(
             "members: at most {MAX_MEMBERS} names of 1 to {MAX_MEMBER_CHARS} characters, no control characters"
         )));
     }
+    // A competition's own invite code registers whatever the server's mode, and leads
+    // to that competition (while it takes part: not after its close).
+    let given = body
+        .invite_code
+        .as_deref()
+        .map(str::trim)
+        .filter(|c| !c.is_empty());
+    let through = match given {
+        Some(code) => {
+            state
+                .storage
+                .competition_by_invite(&hash_token(code))
+                .await?
+        }
+        None => None,
+    };
+    if let Some(c) = &through {
+        let now = crate::storage::now_ms();
+        if crate::registry::competitions::phase(c, now).is_closed() {
+            return Err(ApiError::Forbidden(format!(
+                "competition {} has closed: its invite code registers no one now",
+                c.name
+            )));
+        }
+    }
     // The admin has no limit; the right invite code spends the code's budget, a wrong
     // one its address's budget of guesses, an open registration its address's budget
     // of anonymous registrations (`api::limits`).
     if !caller.is_admin() {
         use super::limits::{Spend, spend};
-        match state.storage.registration().await? {
-            Registration::Open => {
-                if !caller.can_organise() {
-                    spend(state, Spend::AnonymousRegistration, client).await?;
-                }
-            }
-            Registration::Closed => {
+        let mode = state.storage.registration().await?;
+        let server_code =
+            |code: &str| matches!(&mode, Registration::Invite(h) if hash_token(code) == *h);
+        if let (Some(code), None) = (given, &through) {
+            // A code that is no competition's and not the server's: a wrong code,
+            // whatever the mode (a student who followed a mistyped link should hear so).
+            if !server_code(code) {
+                spend(state, Spend::WrongInviteCode, client).await?;
                 return Err(ApiError::Forbidden(
-                    "registration is closed: the admin registers entrants".into(),
+                    "this invite code is not known on this server: check it, or the link, with \
+                     your organiser (`invite_code`)"
+                        .into(),
                 ));
             }
-            Registration::Invite(hash) => {
-                let raw = body.invite_code.as_deref().unwrap_or("");
-                let given = raw.trim();
-                if given.is_empty() {
+        }
+        if let (Some(code), Some(_)) = (given, &through) {
+            spend(state, Spend::InviteRegistration(&hash_token(code)), client).await?;
+        } else {
+            match mode {
+                Registration::Open => {
+                    if !caller.can_organise() {
+                        spend(state, Spend::AnonymousRegistration, client).await?;
+                    }
+                }
+                Registration::Closed => {
                     return Err(ApiError::Forbidden(
-                        "registration is by invite: give the invite code (`invite_code`)".into(),
+                        "registration is closed: the admin registers entrants".into(),
                     ));
                 }
-                // A code pasted with a space around it is still the code.
-                if hash_token(given) != hash && hash_token(raw) != hash {
-                    spend(state, Spend::WrongInviteCode, client).await?;
-                    return Err(ApiError::Forbidden(
-                        "this invite code is not the one for this server: check it with your \
+                Registration::Invite(hash) => {
+                    let raw = body.invite_code.as_deref().unwrap_or("");
+                    let given = raw.trim();
+                    if given.is_empty() {
+                        return Err(ApiError::Forbidden(
+                            "registration is by invite: give the invite code (`invite_code`)"
+                                .into(),
+                        ));
+                    }
+                    // A code pasted with a space around it is still the code.
+                    if hash_token(given) != hash && hash_token(raw) != hash {
+                        spend(state, Spend::WrongInviteCode, client).await?;
+                        return Err(ApiError::Forbidden(
+                            "this invite code is not the one for this server: check it with your \
                          organiser (`invite_code`)"
-                            .into(),
-                    ));
+                                .into(),
+                        ));
+                    }
+                    spend(state, Spend::InviteRegistration(&hash), client).await?;
                 }
-                spend(state, Spend::InviteRegistration(&hash), client).await?;
             }
         }
     }
@@ -251,13 +301,40 @@ pub(crate) async fn register(
         .map_err(|e| ApiError::Internal(format!("members: {e}")))?;
     let row = state
         .storage
-        .create_entrant(&body.name, &members, &hash_token(&key))
+        .create_entrant(
+            &body.name,
+            &members,
+            &hash_token(&key),
+            through.as_ref().map(|c| c.competition_id),
+        )
         .await?;
     Ok(EntrantCreated {
         entrant_id: row.entrant_id,
         name: row.name,
         key,
+        competition: through.map(|c| c.name),
     })
+}
+
+/// List and search the entrants (the admin only).
+#[utoipa::path(get, path = "/api/entrants", tag = "entrants", params(super::invites::EntrantSearch),
+    security(("bearer" = [])),
+    responses((status = 200, body = crate::registry::entrants::EntrantList), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody)))]
+async fn list_entrants(
+    State(state): State<AppState>,
+    caller: Caller,
+    AppQuery(q): AppQuery<super::invites::EntrantSearch>,
+) -> ApiResult<axum::Json<crate::registry::entrants::EntrantList>> {
+    Ok(axum::Json(
+        super::invites::find_entrants(
+            &state,
+            &caller,
+            q.search.as_deref().unwrap_or(""),
+            q.limit.unwrap_or(100),
+        )
+        .await?,
+    ))
 }
 
 /// An entrant: name, members and bots.
@@ -307,8 +384,8 @@ async fn rotate_key(
     Ok(axum::Json(rotate(&state, &caller, id).await?))
 }
 
-/// Replaces entrant `id`'s key for `caller` (that entrant or the admin): the API's and
-/// the "me" page's one way. The old key, its bots' owner tokens and every browser
+/// Replaces entrant `id`'s key for `caller` (that entrant, the organiser of the
+/// competitions it takes part in, or the admin): the API's and the pages' one way. The old key, its bots' owner tokens and every browser
 /// session opened with them stop working at once.
 ///
 /// # Errors
@@ -319,7 +396,14 @@ pub(crate) async fn rotate(state: &AppState, caller: &Caller, id: i64) -> ApiRes
     }
     let allowed = match caller {
         Caller::Admin => true,
-        Caller::Anonymous | Caller::Organiser(_) => false,
+        Caller::Anonymous => false,
+        // An organiser, for an entrant of its competitions only: one that takes part
+        // (or registered through the invite code) in its competitions and in no other
+        // organiser's, whose entries a new key would hand to it.
+        Caller::Organiser(o) => {
+            let of = state.storage.organisers_of_entrant(id).await?;
+            !of.is_empty() && of.iter().all(|x| *x == Some(*o))
+        }
         Caller::Token(hash) => state
             .storage
             .entrant_by_key(hash)
@@ -329,7 +413,12 @@ pub(crate) async fn rotate(state: &AppState, caller: &Caller, id: i64) -> ApiRes
     if !allowed {
         return Err(match caller {
             Caller::Anonymous => ApiError::Unauthorized(format!(
-                "this needs entrant {id}'s key or the admin token (Authorization: Bearer KEY)"
+                "this needs entrant {id}'s key, the organiser of its competitions or the admin \
+                 token (Authorization: Bearer KEY)"
+            )),
+            Caller::Organiser(_) => ApiError::Forbidden(format!(
+                "entrant {id} does not take part only in your competitions: the admin gives it \
+                 a new key"
             )),
             _ => ApiError::Forbidden(format!("this is not entrant {id}'s key")),
         });

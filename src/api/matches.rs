@@ -334,17 +334,30 @@ async fn get_match(
 ) -> ApiResult<axum::Json<MatchView>> {
     let row = find_match(&state, &caller, id).await?;
     let reveal = !row.maze_hidden || caller.is_admin();
-    let mut superseded = state.storage.superseded(id).await?;
-    if !reveal {
-        for s in &mut superseded {
-            s.score = None;
-            s.total_steps = None;
-        }
-    }
+    let superseded = superseded(&state, id, reveal).await?;
     Ok(axum::Json(MatchView {
         superseded,
         ..match_view(row, reveal)
     }))
+}
+
+/// The earlier outcomes of match `id` that rejudges superseded, under the rules of the
+/// match's own row (`reveal`: not a hidden maze's, or the admin): on a hidden maze their
+/// status only, no score, steps or end time. The API's and the match page's one way.
+///
+/// # Errors
+/// The database.
+pub(super) async fn superseded(
+    state: &AppState,
+    id: i64,
+    reveal: bool,
+) -> ApiResult<Vec<crate::storage::rejudges::SupersededRow>> {
+    let rows = state.storage.superseded(id).await?;
+    Ok(if reveal {
+        rows
+    } else {
+        rows.into_iter().map(|s| s.redacted()).collect()
+    })
 }
 
 /// A match as the caller may see it (`reveal`: not a hidden maze's, or the admin).
@@ -465,7 +478,7 @@ async fn replay_parts(
         });
     }
     let record = state.storage.get_record(id).await?;
-    if row.trace_removed(record.as_ref()) {
+    if row.trace_removed() {
         return Err(ApiError::Conflict(format!(
             "the trace of match {id} was removed to save space (an old practice match); \
              GET /api/matches/{id} still has its result"

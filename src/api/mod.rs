@@ -13,12 +13,14 @@ pub mod competitions;
 pub mod connections;
 pub mod entrants;
 pub mod error;
+pub mod invites;
 pub mod leaderboard;
 pub mod limits;
 pub mod lists;
 pub mod matches;
 pub mod mazes;
 pub mod pages;
+pub mod practice;
 pub mod session;
 pub mod system;
 pub mod tournaments;
@@ -129,6 +131,8 @@ pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
         .merge(bots::router())
         .merge(entrants::router())
         .merge(competitions::router())
+        .merge(invites::router())
+        .merge(practice::router())
         .merge(mazes::router())
         .merge(matches::router())
         .merge(tournaments::router())
@@ -206,6 +210,10 @@ pub fn app(state: AppState) -> Router {
         .fallback(error::not_found)
         .method_not_allowed_fallback(error::method_not_allowed)
         .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            session::clear_tossed_cookies,
+        ))
         .layer(CompressionLayer::new())
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,

@@ -4,8 +4,10 @@
 //! and sets a cookie holding a fresh random secret; the server keeps only the secret's
 //! SHA-256 with the key's hash and an end time ([`SESSION_LIFETIME`]). The cookie is
 //! `HttpOnly`, `SameSite=Strict`, `Path=/`, and `Secure` when the server is told it is
-//! behind HTTPS. A session is never taken from the visitor: each login makes a new one,
-//! so a secret planted before the login opens nothing. `/logout` deletes it on the
+//! behind HTTPS, where its name carries the `__Host-` prefix. A request with two session
+//! cookies (one set by a page of another port or a sibling host for a path of this site:
+//! cookie tossing) is served as signed out, and its answer clears them. A session is
+//! never taken from the visitor: each login makes a new one, so a secret planted before the login opens nothing. `/logout` deletes it on the
 //! server; rotating an entrant's key deletes every session of that key and of its bots'
 //! owner tokens.
 //!
@@ -29,8 +31,18 @@ use super::AppState;
 use super::auth::{Caller, hash_token, new_token};
 use super::error::ApiError;
 
-/// The session cookie's name.
+/// The session cookie's name over plain HTTP.
 pub const COOKIE: &str = "mazearena_session";
+
+/// The session cookie's name over HTTPS: a browser keeps a `__Host-` cookie only when
+/// it is `Secure`, for the path `/` and without a `Domain`, so a page of another port or
+/// a sibling host cannot set one for a path of this site (cookie tossing).
+pub const SECURE_COOKIE: &str = "__Host-mazearena_session";
+
+/// The session cookie's name for a request served over HTTPS (`secure`) or not.
+pub fn cookie_name(secure: bool) -> &'static str {
+    if secure { SECURE_COOKIE } else { COOKIE }
+}
 
 /// How long a session lasts from its login.
 pub const SESSION_LIFETIME: Duration = Duration::from_secs(7 * 24 * 3600);
@@ -96,17 +108,81 @@ pub fn csrf_token(secret: &str) -> String {
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// The cookie's secret in `headers`, if any.
-fn cookie_secret(headers: &HeaderMap) -> Option<String> {
+/// Every value of the cookie `name` in `headers`. A browser sends two cookies of one
+/// name when a page of another port (cookies do not tell ports apart) or a sibling host
+/// set one for a path of this site: which is the visitor's cannot be known.
+fn cookie_values(headers: &HeaderMap, name: &str) -> Vec<String> {
     headers
         .get_all(header::COOKIE)
         .iter()
         .filter_map(|v| v.to_str().ok())
         .flat_map(|v| v.split(';'))
         .filter_map(|pair| Cookie::parse(pair.trim().to_string()).ok())
-        .find(|c| c.name() == COOKIE)
+        .filter(|c| c.name() == name)
         .map(|c| c.value().to_string())
-        .filter(|v| !v.is_empty() && v.len() <= 128)
+        .collect()
+}
+
+/// The session cookie's secret in `headers` (of a request served over HTTPS:
+/// `secure`), if there is exactly one: with two or more (one of them tossed by another
+/// site), none.
+fn cookie_secret(headers: &HeaderMap, secure: bool) -> Option<String> {
+    match cookie_values(headers, cookie_name(secure)).as_slice() {
+        [one] if !one.is_empty() && one.len() <= 128 => Some(one.clone()),
+        _ => None,
+    }
+}
+
+/// Whether `headers` carry more than one session cookie: the request is served as
+/// signed out, and [`clear_tossed_cookies`] clears them.
+pub fn tossed(headers: &HeaderMap, secure: bool) -> bool {
+    cookie_values(headers, cookie_name(secure)).len() > 1
+}
+
+/// Middleware: an answer to a request that carried two or more session cookies (one
+/// tossed by another site: [`tossed`]) removes them: the cookie of this host at `/` and
+/// at each folder of this request's path (where a tossed cookie that was sent with it
+/// lives, unless another host set it for the whole domain; it is refused all the same).
+/// The visitor logs in again. (`Clear-Site-Data` would also clear every other site's
+/// cookies of the registrable domain: a school's other sites.)
+pub async fn clear_tossed_cookies(
+    axum::extract::State(state): axum::extract::State<AppState>,
+    request: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> axum::response::Response {
+    let secure = secure(&state, request.headers());
+    let path = request.uri().path().to_string();
+    let clear = tossed(request.headers(), secure);
+    let mut response = next.run(request).await;
+    if clear {
+        let headers = response.headers_mut();
+        let mut paths = vec!["/".to_string()];
+        // A path of the site's own pages (letters, digits and `/-_.`): each of its
+        // folders, at most a few.
+        if path
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b"/-_.".contains(&b))
+        {
+            let mut at = String::new();
+            for part in path.split('/').filter(|p| !p.is_empty()).take(6) {
+                at.push('/');
+                at.push_str(part);
+                paths.push(at.clone());
+            }
+        }
+        for p in paths {
+            let gone = Cookie::build((cookie_name(secure), ""))
+                .path(p)
+                .http_only(true)
+                .secure(secure)
+                .max_age(cookie::time::Duration::ZERO)
+                .build();
+            if let Ok(v) = axum::http::HeaderValue::from_str(&gone.to_string()) {
+                headers.append(header::SET_COOKIE, v);
+            }
+        }
+    }
+    response
 }
 
 impl FromRequestParts<AppState> for Visitor {
@@ -120,7 +196,7 @@ impl FromRequestParts<AppState> for Visitor {
             caller: Caller::Anonymous,
             session: None,
         };
-        let Some(secret) = cookie_secret(&parts.headers) else {
+        let Some(secret) = cookie_secret(&parts.headers, secure(state, &parts.headers)) else {
             return Ok(anonymous);
         };
         let hash = hash_token(&secret);
@@ -175,7 +251,7 @@ pub async fn open(
 
 /// The session cookie holding `secret` for `max_age` (zero: the cookie that removes it).
 pub fn cookie(secret: String, secure: bool, max_age: Duration) -> Cookie<'static> {
-    Cookie::build((COOKIE, secret))
+    Cookie::build((cookie_name(secure), secret))
         .path("/")
         .http_only(true)
         .same_site(SameSite::Strict)

@@ -410,6 +410,16 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
         let status = follow_build(&api, &cfg, bot_id, version).await?;
         match status.as_str() {
             "ready" => {
+                // A failure on a maze that does not make the version invalid: its owner
+                // reads it (with the traceback) before the ranking shows it.
+                let owner = owner_api(&api, &cfg, bot_id);
+                let log: Value = owner
+                    .get(&format!("/api/bots/{bot_id}/versions/{version}/build-log"))
+                    .await
+                    .unwrap_or(Value::Null);
+                if let Some(log) = log["build_log"].as_str().filter(|l| l.contains("warning: ")) {
+                    eprintln!("--- validation (with a warning) ---\n{}", show::log(log.trim_end()));
+                }
                 println!("version {version} is ready: {page}");
                 Ok(())
             }

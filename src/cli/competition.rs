@@ -141,6 +141,18 @@ pub struct EditArgs {
     /// Title.
     #[arg(long)]
     title: Option<String>,
+    /// How new versions are checked: `start` (invalid only for a failure that no maze
+    /// causes), `match` (invalid for any failure in the validation match) or `off`.
+    #[arg(long, value_parser = ["start", "match", "off"])]
+    validation: Option<String>,
+    /// Add a practice maze (a maze file; its file name, without the extension, names
+    /// it). May be given several times.
+    #[arg(long, value_name = "FILE")]
+    add_practice: Vec<std::path::PathBuf>,
+    /// Remove a practice maze, by its name in the competition. May be given several
+    /// times.
+    #[arg(long, value_name = "NAME")]
+    remove_practice: Vec<String>,
     #[command(flatten)]
     db: DatabaseArg,
 }
@@ -389,9 +401,34 @@ async fn edit(args: EditArgs) -> anyhow::Result<()> {
         final_repeats: args.final_repeats,
         selection,
         organiser: args.organiser,
+        validation: args
+            .validation
+            .as_deref()
+            .map(crate::competition::Validation::parse),
         ..Patch::default()
     };
     let c = ops::edit(&storage, c, patch, now).await?;
+    for path in &args.add_practice {
+        let layout = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read the maze {}", path.display()))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "practice".into());
+        let id = ops::add_practice_maze(&storage, &c, &MazeText { name, layout }, now).await?;
+        println!("practice maze {} added (maze {id})", path.display());
+    }
+    for name in &args.remove_practice {
+        let mazes = storage.competition_mazes(c.competition_id).await?;
+        let m = mazes
+            .iter()
+            .find(|m| m.maze_set == "practice" && &m.name == name)
+            .with_context(|| {
+                format!("competition {} has no practice maze named {name:?}", c.name)
+            })?;
+        ops::remove_practice_maze(&storage, &c, m.maze_id, now).await?;
+        println!("practice maze {name} removed");
+    }
     print_line(&storage, &c).await
 }
 

@@ -8,5 +8,7 @@ pub mod spec;
 pub mod timeline;
 
 pub use selection::{Candidate, Rule, VersionScore};
-pub use spec::{Limits, MazeSets, MazeText, Spec, SpecError, Timestamp, read_competition_file};
+pub use spec::{
+    Limits, MazeSets, MazeText, Spec, SpecError, Timestamp, Validation, read_competition_file,
+};
 pub use timeline::{DAY_MS, Phase, Quota, Timeline};

@@ -241,8 +241,50 @@ pub struct Spec<M> {
     /// The match limits.
     #[serde(default)]
     pub limits: Limits,
+    /// How each new version is checked before it plays: `start` (the default), `match`
+    /// or `off` ([`Validation`]).
+    #[serde(default)]
+    pub validation: Validation,
     /// The maze sets.
     pub mazes: MazeSets<M>,
+}
+
+/// How a competition checks each new version before it plays: its validation match, on
+/// the competition's practice mazes, under its limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Validation {
+    /// Invalid only for a failure that no maze causes: the version fails before its
+    /// first move on every maze it is tried on (its practice mazes, then a generated
+    /// maze of another size): it does not start, has a syntax error, needs another
+    /// runtime or speaks another protocol. A failure on a maze after the first move, or
+    /// on some mazes only, is a warning to its owner: the version plays.
+    #[default]
+    Start,
+    /// Invalid for any failure in the validation match on the first practice maze.
+    Match,
+    /// No validation match: every version that builds plays.
+    Off,
+}
+
+impl Validation {
+    /// Its name: `start`, `match` or `off`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Validation::Start => "start",
+            Validation::Match => "match",
+            Validation::Off => "off",
+        }
+    }
+
+    /// The validation named `name` (a stored one that is not known: `start`).
+    pub fn parse(name: &str) -> Validation {
+        match name {
+            "match" => Validation::Match,
+            "off" => Validation::Off,
+            _ => Validation::Start,
+        }
+    }
 }
 
 fn one() -> u32 {
@@ -351,6 +393,7 @@ impl<M> Spec<M> {
             max_selected: self.max_selected,
             reveal_private_mazes: self.reveal_private_mazes,
             limits: self.limits,
+            validation: self.validation,
             mazes,
         }
     }

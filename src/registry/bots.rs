@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::bundles::{BotFiles, store_upload};
+use super::bundles::{BotFiles, Stored, store_upload};
 use super::tokens::{hash_token, new_token};
 use super::{RegistryError, Result};
 use crate::botfiles::{BundleLimits, BundleSummary, hash_dir, skip_build_outputs};
@@ -93,11 +93,32 @@ pub fn check_command(what: &str, command: &str) -> Result<()> {
 /// # Errors
 /// [`RegistryError::Invalid`].
 pub fn check_submission(s: &Submission) -> Result<()> {
-    check_command("the command", &s.command)?;
+    // An original-task robot's command may be left out: it is made once its robot's
+    // file is known ([`with_robot_command`]).
+    if !(s.command.is_empty() && matches!(s.files, BotFiles::OriginalTask { .. })) {
+        check_command("the command", &s.command)?;
+    }
     if let Some(build) = &s.build {
         check_command("the build command", build)?;
     }
     botenv::check(&s.env).map_err(|e| RegistryError::Invalid(format!("env: {e}")))
+}
+
+/// The submission's command once its files are stored as `stored`: an original-task
+/// robot without a command of its own runs its robot's file through the adapter.
+fn with_robot_command(submission: &mut Submission, stored: &Stored) -> Result<()> {
+    if submission.command.is_empty() {
+        let robot = stored.robot.as_deref().ok_or_else(|| {
+            RegistryError::Invalid(
+                "the bot needs a `command` (e.g. `python3 bot.py`), or `original_task` for a \
+                 robot.py of the original task"
+                    .into(),
+            )
+        })?;
+        submission.command =
+            super::bundles::original_task_command(submission.runtime.is_some(), robot);
+    }
+    check_command("the command", &submission.command)
 }
 
 /// Registers a bot named `name` with its first version, the bot of `entrant` if given
@@ -122,7 +143,9 @@ pub async fn register(
         return Err(taken(name));
     }
     let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
-    let summary = store_upload(storage, files, scratch).await?;
+    let stored = store_upload(storage, files, scratch).await?;
+    with_robot_command(&mut submission, &stored)?;
+    let summary = stored.summary;
     let owner_token = new_token()?;
     let version = match storage
         .create_bot_within(
@@ -160,7 +183,9 @@ pub async fn add_version(
         return Err(RegistryError::NotFound(format!("no bot {bot_id}")));
     }
     let files = std::mem::replace(&mut submission.files, BotFiles::Map(Default::default()));
-    let summary = store_upload(storage, files, scratch).await?;
+    let stored = store_upload(storage, files, scratch).await?;
+    with_robot_command(&mut submission, &stored)?;
+    let summary = stored.summary;
     match storage
         .add_bot_version_within(
             bot_id,
@@ -287,7 +312,9 @@ fn stored_version<'a>(submission: &'a Submission, summary: &'a BundleSummary) ->
 }
 
 fn taken(name: &str) -> RegistryError {
-    RegistryError::Conflict(format!("a bot named {name:?} exists already"))
+    RegistryError::Conflict(format!(
+        "a bot named {name:?} exists already (names that differ only in case are one name)"
+    ))
 }
 
 #[cfg(test)]

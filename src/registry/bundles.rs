@@ -22,10 +22,27 @@ pub enum BotFiles {
     Map(BTreeMap<String, String>),
     /// An archive's bytes.
     Archive(Vec<u8>),
-    /// The files (a map or an archive) of a `robot.py` written for the original task, to
+    /// The files (a map or an archive) of a robot written for the original task, to
     /// which the server adds its adapter ([`ORIGINAL_TASK_ADAPTER`], as
     /// [`ADAPTER_FILE`]) so that its author uploads only their own files.
-    OriginalTask(Box<BotFiles>),
+    OriginalTask {
+        /// The author's files.
+        files: Box<BotFiles>,
+        /// The file (at the top, `.py`) that holds `class Robot`, as its author named
+        /// it; none: `robot.py`, or else the only top-level `.py` file that defines
+        /// `class Robot` ([`robot_file`]).
+        robot: Option<String>,
+    },
+}
+
+/// What [`store_upload`] stored: the bundle, and for an original-task robot the file
+/// that holds its `class Robot`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Stored {
+    /// The stored bundle.
+    pub summary: BundleSummary,
+    /// The robot's file (original-task uploads only).
+    pub robot: Option<String>,
 }
 
 /// The adapter that runs an unchanged original-task `robot.py` as a protocol-v1 bot.
@@ -34,36 +51,136 @@ pub const ORIGINAL_TASK_ADAPTER: &str = include_str!("../../bots/python/udacity_
 /// The adapter's file name in a bot's folder.
 pub const ADAPTER_FILE: &str = "udacity_adapter.py";
 
-/// The robot file an original-task upload must hold.
+/// The robot file an original-task upload holds unless its author names another.
 pub const ROBOT_FILE: &str = "robot.py";
 
-/// Writes `files` into `dest` (checking every rule of [`crate::botfiles`]).
-fn write_upload(files: &BotFiles, dest: &Path, limits: &BundleLimits) -> Result<BundleSummary> {
+/// The command of an original-task robot whose `class Robot` is in `robot`: the
+/// adapter run by `python3` (the system's), or by `python` when the bot chose a runtime
+/// (`with_runtime`: a virtual environment has both names; a Python 2 one only
+/// `python`).
+pub fn original_task_command(with_runtime: bool, robot: &str) -> String {
+    let python = if with_runtime { "python" } else { "python3" };
+    format!("{python} {ADAPTER_FILE} {robot}")
+}
+
+/// Whether Python source `text` defines a top-level `class Robot` (a line that starts
+/// with `class Robot` followed by `(` or `:`). Read as text, never run.
+fn defines_robot(text: &str) -> bool {
+    text.lines().any(|l| {
+        l.strip_prefix("class Robot")
+            .is_some_and(|rest| rest.trim_start().starts_with(['(', ':']))
+    })
+}
+
+/// Checks the name of an original-task robot's file as its author gave it: a `.py`
+/// file at the top of the files (letters, digits, `_`, `-`, `.`).
+fn check_robot_name(name: &str) -> Result<()> {
+    let ok = name.len() <= 100
+        && name.ends_with(".py")
+        && name.len() > 3
+        && !name.starts_with(['.', '-'])
+        && name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b"_-.".contains(&b));
+    if ok {
+        Ok(())
+    } else {
+        Err(RegistryError::Invalid(format!(
+            "the robot's file {name:?} is not a .py file at the top of the files (letters, \
+             digits, _, - and . only)"
+        )))
+    }
+}
+
+/// The file of an original-task robot written into `dest`: `named` if its author
+/// named one (it must be there), else [`ROBOT_FILE`] if it is there, else the only
+/// top-level `.py` file that defines `class Robot`.
+///
+/// # Errors
+/// [`RegistryError::Invalid`] saying what is there and how to name the file.
+pub fn robot_file(dest: &Path, named: Option<&str>, files: usize) -> Result<String> {
+    if let Some(name) = named.map(str::trim).filter(|n| !n.is_empty()) {
+        check_robot_name(name)?;
+        if fs::symlink_metadata(dest.join(name)).is_ok_and(|m| m.is_file()) {
+            return Ok(name.to_string());
+        }
+        return Err(RegistryError::Invalid(format!(
+            "the robot's file {name} is not among the uploaded files (at their top)"
+        )));
+    }
+    if dest.join(ROBOT_FILE).is_file() {
+        return Ok(ROBOT_FILE.to_string());
+    }
+    let mut python: Vec<String> = Vec::new();
+    let mut robots: Vec<String> = Vec::new();
+    let entries = fs::read_dir(dest)
+        .map_err(|e| RegistryError::Internal(format!("cannot read the upload's folder: {e}")))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Ok(meta) = fs::symlink_metadata(entry.path()) else {
+            continue;
+        };
+        if !meta.is_file() || !name.ends_with(".py") || name == ADAPTER_FILE {
+            continue;
+        }
+        python.push(name.clone());
+        // Files are at most a few MiB (the bundle's limits): read as text.
+        let text = fs::read(entry.path()).unwrap_or_default();
+        if defines_robot(&String::from_utf8_lossy(&text)) {
+            robots.push(name);
+        }
+    }
+    python.sort();
+    robots.sort();
+    match robots.as_slice() {
+        [one] => Ok(one.clone()),
+        [] => {
+            // An archive of the folder rather than of its files: say so.
+            let nested = fs::read_dir(dest)
+                .into_iter()
+                .flatten()
+                .flatten()
+                .find(|e| e.path().join(ROBOT_FILE).is_file())
+                .map(|e| e.file_name().to_string_lossy().into_owned());
+            Err(RegistryError::Invalid(match nested {
+                Some(folder) => format!(
+                    "{ROBOT_FILE} is inside the folder {folder:?} of the archive: archive \
+                     the files themselves (robot.py at the top), not their folder"
+                ),
+                None if python.is_empty() => format!(
+                    "an original-task robot needs the .py file that defines class Robot at \
+                     the top of its files (the upload has {files} files, no .py file among them)"
+                ),
+                None => format!(
+                    "an original-task robot needs the .py file that defines class Robot: none \
+                     of {} does (at the start of a line: `class Robot(object):` or `class Robot:`)",
+                    python.join(", ")
+                ),
+            }))
+        }
+        many => Err(RegistryError::Invalid(format!(
+            "several files define class Robot ({}): name the robot's file (robot_file)",
+            many.join(", ")
+        ))),
+    }
+}
+
+/// Writes `files` into `dest` (checking every rule of [`crate::botfiles`]); for an
+/// original-task robot, the file that holds its `class Robot` too.
+fn write_upload(
+    files: &BotFiles,
+    dest: &Path,
+    limits: &BundleLimits,
+) -> Result<(BundleSummary, Option<String>)> {
     Ok(match files {
-        BotFiles::Map(map) => botfiles::write_files(map, dest, limits)?,
-        BotFiles::Archive(bytes) => botfiles::unpack_archive(bytes, dest, limits)?,
-        BotFiles::OriginalTask(inner) => {
-            let summary = write_upload(inner, dest, limits)?;
-            if !dest.join(ROBOT_FILE).is_file() {
-                // An archive of the folder rather than of its files: say so.
-                let nested = fs::read_dir(dest)
-                    .into_iter()
-                    .flatten()
-                    .flatten()
-                    .find(|e| e.path().join(ROBOT_FILE).is_file())
-                    .map(|e| e.file_name().to_string_lossy().into_owned());
-                return Err(RegistryError::Invalid(match nested {
-                    Some(folder) => format!(
-                        "{ROBOT_FILE} is inside the folder {folder:?} of the archive: archive \
-                         the files themselves (robot.py at the top), not their folder"
-                    ),
-                    None => format!(
-                        "an original-task robot needs a file named {ROBOT_FILE} at the top of \
-                         its files (the upload has {} files, none of them {ROBOT_FILE})",
-                        summary.files
-                    ),
-                }));
-            }
+        BotFiles::Map(map) => (botfiles::write_files(map, dest, limits)?, None),
+        BotFiles::Archive(bytes) => (botfiles::unpack_archive(bytes, dest, limits)?, None),
+        BotFiles::OriginalTask {
+            files: inner,
+            robot,
+        } => {
+            let (summary, _) = write_upload(inner, dest, limits)?;
+            let robot = robot_file(dest, robot.as_deref(), summary.files)?;
             // The uploaded entry of that name (a file or a link) is replaced, never
             // written through: the new file is created where nothing is.
             let path = dest.join(ADAPTER_FILE);
@@ -85,7 +202,7 @@ fn write_upload(files: &BotFiles, dest: &Path, limits: &BundleLimits) -> Result<
                 .and_then(|mut f| f.write_all(ORIGINAL_TASK_ADAPTER.as_bytes()))
                 .map_err(|e| RegistryError::Internal(format!("cannot add the adapter: {e}")))?;
             // The summary is the packed folder's, adapter included.
-            return Ok(summary);
+            (summary, Some(robot))
         }
     })
 }
@@ -95,28 +212,27 @@ fn write_upload(files: &BotFiles, dest: &Path, limits: &BundleLimits) -> Result<
 ///
 /// # Errors
 /// [`RegistryError::Bundle`] for refused files; the database; the local disk.
-pub async fn store_upload(
-    storage: &Storage,
-    files: BotFiles,
-    scratch: &Path,
-) -> Result<BundleSummary> {
+pub async fn store_upload(storage: &Storage, files: BotFiles, scratch: &Path) -> Result<Stored> {
     let scratch = scratch.to_path_buf();
-    let packed = blocking(move || {
+    let (packed, robot) = blocking(move || {
         let (_tmp, dest) = scratch_dir(&scratch)?;
         let limits = BundleLimits::default();
-        let summary = write_upload(&files, &dest, &limits)?;
+        let (summary, robot) = write_upload(&files, &dest, &limits)?;
         let packed = botfiles::pack_dir(&dest, &limits, &skip_nothing)?;
-        if !matches!(files, BotFiles::OriginalTask(_)) && packed.summary != summary {
+        if !matches!(files, BotFiles::OriginalTask { .. }) && packed.summary != summary {
             return Err(RegistryError::Internal(format!(
                 "the files packed again give {:?}, not {summary:?}",
                 packed.summary
             )));
         }
-        Ok(packed)
+        Ok((packed, robot))
     })
     .await??;
     put(storage, &packed).await?;
-    Ok(packed.summary)
+    Ok(Stored {
+        summary: packed.summary,
+        robot,
+    })
 }
 
 /// Stores the folder `dir` (a bot's folder after its build, or an old data folder) as a
@@ -241,16 +357,25 @@ mod tests {
                     .collect(),
             )
         };
-        let ok = store_upload(
+        let original = |pairs: &[(&str, &str)], robot: Option<&str>| BotFiles::OriginalTask {
+            files: Box::new(files(pairs)),
+            robot: robot.map(str::to_string),
+        };
+        let stored = store_upload(
             &db,
-            BotFiles::OriginalTask(Box::new(files(&[
-                ("robot.py", "class Robot: pass\n"),
-                ("udacity_adapter.py", "print('not the adapter')\n"),
-            ]))),
+            original(
+                &[
+                    ("robot.py", "class Robot: pass\n"),
+                    ("udacity_adapter.py", "print('not the adapter')\n"),
+                ],
+                None,
+            ),
             scratch.path(),
         )
         .await
         .unwrap();
+        assert_eq!(stored.robot.as_deref(), Some("robot.py"));
+        let ok = stored.summary;
         assert_eq!(
             ok.files, 2,
             "the robot and the adapter, which replaced the upload's"
@@ -266,27 +391,81 @@ mod tests {
         .await
         .unwrap();
         assert_eq!(
-            ok.sha256, same.sha256,
+            ok.sha256, same.summary.sha256,
             "the server's adapter, byte for byte"
         );
-        let nested = store_upload(
-            &db,
-            BotFiles::OriginalTask(Box::new(files(&[("mine/robot.py", "x = 1\n")]))),
-            scratch.path(),
-        )
-        .await
-        .unwrap_err()
-        .to_string();
+        let refused = |pairs: &'static [(&'static str, &'static str)],
+                       robot: Option<&'static str>| {
+            let (db, scratch) = (&db, scratch.path());
+            async move {
+                store_upload(db, original(pairs, robot), scratch)
+                    .await
+                    .unwrap_err()
+                    .to_string()
+            }
+        };
+        let nested = refused(&[("mine/robot.py", "x = 1\n")], None).await;
         assert!(nested.contains("inside the folder \"mine\""), "{nested}");
-        let none = store_upload(
+        let none = refused(&[("bot.py", "x = 1\n")], None).await;
+        assert!(
+            none.contains("defines class Robot") && none.contains("bot.py"),
+            "{none}"
+        );
+        let no_python = refused(&[("notes.txt", "x\n")], None).await;
+        assert!(no_python.contains("no .py file"), "{no_python}");
+        // Another name: the only file that defines class Robot, which may import its
+        // helpers; or the one its author names.
+        let found = store_upload(
             &db,
-            BotFiles::OriginalTask(Box::new(files(&[("bot.py", "x = 1\n")]))),
+            original(
+                &[
+                    (
+                        "robot_final.py",
+                        "from astar_final import plan\n\nclass Robot(object):\n    pass\n",
+                    ),
+                    ("astar_final.py", "def plan():\n    return []\n"),
+                ],
+                None,
+            ),
             scratch.path(),
         )
         .await
-        .unwrap_err()
-        .to_string();
-        assert!(none.contains("needs a file named robot.py"), "{none}");
+        .unwrap();
+        assert_eq!(found.robot.as_deref(), Some("robot_final.py"));
+        let two = &[
+            ("a.py", "class Robot:\n    pass\n"),
+            ("b.py", "class Robot (object):\n    pass\n"),
+        ];
+        let many = refused(two, None).await;
+        assert!(
+            many.contains("several files define class Robot (a.py, b.py)"),
+            "{many}"
+        );
+        let named = store_upload(&db, original(two, Some("b.py")), scratch.path())
+            .await
+            .unwrap();
+        assert_eq!(named.robot.as_deref(), Some("b.py"));
+        let missing = refused(two, Some("c.py")).await;
+        assert!(
+            missing.contains("c.py is not among the uploaded files"),
+            "{missing}"
+        );
+        for bad in ["../a.py", "a.txt", "sub/a.py", "-a.py"] {
+            let e = store_upload(&db, original(two, Some(bad)), scratch.path())
+                .await
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("is not a .py file at the top"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_robot_class_is_found_by_its_line_not_its_mention() {
+        assert!(defines_robot("import x\nclass Robot(object):\n"));
+        assert!(defines_robot("class Robot:\n"));
+        assert!(!defines_robot("class RobotHelper(object):\n"));
+        assert!(!defines_robot("# class Robot is in robot.py\n"));
+        assert!(!defines_robot("    class Robot:\n"));
     }
 
     use super::*;
@@ -302,7 +481,8 @@ mod tests {
             .collect();
         let from_map = store_upload(&db, BotFiles::Map(map), scratch.path())
             .await
-            .unwrap();
+            .unwrap()
+            .summary;
         // The same files as a .tar.gz (packed from a folder) give the same hash.
         let folder = tempfile::tempdir().unwrap();
         fs::create_dir(folder.path().join("lib")).unwrap();
@@ -313,7 +493,8 @@ mod tests {
             .archive;
         let from_tgz = store_upload(&db, BotFiles::Archive(tgz), scratch.path())
             .await
-            .unwrap();
+            .unwrap()
+            .summary;
         assert_eq!(from_map, from_tgz);
         assert_eq!((from_map.files, from_map.bytes), (2, 15));
         assert_eq!(db.bundle_totals().await.unwrap().0, 1);

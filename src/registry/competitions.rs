@@ -96,6 +96,65 @@ pub async fn create(
         .await?)
 }
 
+/// Adds maze `m` to competition `c`'s practice set while it takes part (before its
+/// close): public on this server (admitted if new); answers its id.
+///
+/// # Errors
+/// [`RegistryError::Conflict`] once closed or for a maze in it already, or a hidden
+/// maze's layout; [`RegistryError::Invalid`] for a bad maze; the database.
+pub async fn add_practice_maze(
+    storage: &Storage,
+    c: &CompetitionRow,
+    m: &MazeText,
+    now: i64,
+) -> Result<i64> {
+    practice_open(c, now)?;
+    let id = admit(storage, m, false).await.map_err(|e| match e {
+        RegistryError::Invalid(why) => {
+            RegistryError::Invalid(format!("practice maze {:?}: {why}", m.name))
+        }
+        other => other,
+    })?;
+    storage.add_practice_maze(c.competition_id, id).await?;
+    Ok(id)
+}
+
+/// Removes practice maze `maze_id` from competition `c` while it takes part (its
+/// practice matches stay).
+///
+/// # Errors
+/// [`RegistryError::Conflict`] once closed; [`RegistryError::NotFound`] for a maze that
+/// is not one of its practice mazes; the database.
+pub async fn remove_practice_maze(
+    storage: &Storage,
+    c: &CompetitionRow,
+    maze_id: i64,
+    now: i64,
+) -> Result<()> {
+    practice_open(c, now)?;
+    if !storage
+        .remove_practice_maze(c.competition_id, maze_id)
+        .await?
+    {
+        return Err(RegistryError::NotFound(format!(
+            "maze {maze_id} is not a practice maze of competition {}",
+            c.name
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses a change of the practice mazes once `c` has closed.
+fn practice_open(c: &CompetitionRow, now: i64) -> Result<()> {
+    if c.kind == "default" || phase(c, now).is_closed() {
+        return Err(RegistryError::Conflict(format!(
+            "competition {} takes no practice mazes now: it has closed (or is the default one)",
+            c.name
+        )));
+    }
+    Ok(())
+}
+
 /// The stored maze of `m`'s layout, or `m` admitted; its visibility must be `hidden`.
 async fn admit(storage: &Storage, m: &MazeText, hidden: bool) -> Result<i64> {
     let text = m.layout.clone().into_bytes();
@@ -159,6 +218,9 @@ pub struct Patch {
     pub reveal_private_mazes: Option<bool>,
     /// The match limits (all three, replacing the old).
     pub limits: Option<Limits>,
+    /// How new versions are checked: `start`, `match` or `off` (versions checked
+    /// already keep their status).
+    pub validation: Option<crate::competition::Validation>,
     /// Hands the competition to the organiser of this name (the admin only: the API
     /// checks it).
     pub organiser: Option<String>,
@@ -191,7 +253,8 @@ pub async fn edit(
         || patch.max_selected.is_some()
         || patch.final_repeats.is_some()
         || patch.reveal_private_mazes.is_some()
-        || patch.limits.is_some();
+        || patch.limits.is_some()
+        || patch.validation.is_some();
     if phase.is_closed() && rules_change {
         return Err(RegistryError::Conflict(format!(
             "competition {} closed at {}: only its title, description and rules can change",
@@ -308,6 +371,9 @@ pub async fn edit(
     }
     if let Some(reveal) = patch.reveal_private_mazes {
         c.reveal_private_mazes = reveal;
+    }
+    if let Some(v) = patch.validation {
+        c.validation = v.as_str().to_string();
     }
     if let Some(limits) = patch.limits {
         limits.check().map_err(invalid)?;
@@ -634,9 +700,13 @@ pub struct Board {
     pub sealed: bool,
     /// Since when the public board shows only versions uploaded before the freeze.
     pub frozen_at: Option<Timestamp>,
-    /// On the private board: how far the final run has played (none before the close's
-    /// selection has queued it).
+    /// On the private board: how far the final run has played, for the competition's
+    /// organisers, and for everyone once the results are written (none before the
+    /// close's selection has queued it; none for anyone else while it plays: its count
+    /// would time each private match).
     pub final_run: Option<RunProgress>,
+    /// On the private board: whether the final run is playing now (for everyone).
+    pub final_run_playing: bool,
     /// Best first.
     pub standings: Vec<BoardLine>,
 }
@@ -667,6 +737,18 @@ pub async fn final_progress(storage: &Storage, c: &CompetitionRow) -> Result<Opt
     };
     let (played, total) = storage.tournament_progress(t).await?;
     Ok(Some(RunProgress { played, total }))
+}
+
+/// The final run's progress `progress` as a caller may see it: the competition's
+/// organisers (`organiser`) while it plays, everyone once the results are written. For
+/// anyone else a count that moves with each match would be a clock of the private
+/// matches (their order is random, but their times are not).
+pub fn progress_for(
+    c: &CompetitionRow,
+    progress: Option<RunProgress>,
+    organiser: bool,
+) -> Option<RunProgress> {
+    progress.filter(|_| organiser || c.state.as_deref() == Some("final"))
 }
 
 /// Board `kind` of competition `c` at `now`, as an organiser of it (`organiser`:
@@ -741,7 +823,8 @@ pub async fn board(
         board: kind,
         sealed,
         frozen_at: frozen_at.map(Timestamp),
-        final_run: progress,
+        final_run: progress_for(c, progress, organiser),
+        final_run_playing: progress.is_some() && c.state.as_deref() != Some("final"),
         standings,
     })
 }
@@ -865,7 +948,11 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
                 let selected = final_selection(storage, &c).await?;
                 let mazes = storage.competition_mazes(c.competition_id).await?;
                 let private = in_set(&mazes, "private");
-                if storage.start_final(&c, &selected, &private).await? {
+                let mut order = [0u8; 8];
+                getrandom::fill(&mut order)
+                    .map_err(|e| RegistryError::Internal(format!("no randomness: {e}")))?;
+                let order = u64::from_le_bytes(order);
+                if storage.start_final(&c, &selected, &private, order).await? {
                     report.selected += 1;
                     report.closing += 1;
                 }
@@ -1216,6 +1303,7 @@ mod tests {
             max_selected: 1,
             reveal_private_mazes: true,
             limits: Limits::default(),
+            validation: Default::default(),
             mazes: MazeSets {
                 practice: vec![maze(7001)],
                 public: vec![maze(7002)],
@@ -1326,7 +1414,7 @@ mod tests {
         crate::storage::entrants::EntrantRow,
         crate::storage::bots::BotVersionRow,
     ) {
-        let e = db.create_entrant("e", "[]", "k").await.unwrap();
+        let e = db.create_entrant("e", "[]", "k", None).await.unwrap();
         let v = db.create_bot("b", "h", &plain_version()).await.unwrap();
         db.set_bot_entrant(v.bot_id, e.entrant_id).await.unwrap();
         db.enter_competition(c.competition_id, v.bot_id, e.entrant_id)
@@ -1521,7 +1609,11 @@ mod tests {
             assert_eq!(tick(&db, later).await.unwrap().selected, 1);
             assert!(!sealed(&db, c.private_tournament_id).await);
             let c = db.get_competition("c").await.unwrap().unwrap();
-            assert!(!db.start_final(&c, &[v.bot_version_id], &[]).await.unwrap());
+            assert!(
+                !db.start_final(&c, &[v.bot_version_id], &[], 7)
+                    .await
+                    .unwrap()
+            );
             assert!(sealed(&db, c.final_tournament_id).await);
             // The final run: 2 private mazes x 1 repeat, with seeds of its own.
             let final_matches = db
@@ -1561,6 +1653,11 @@ mod tests {
                 .await
                 .unwrap();
             assert!(private.sealed && private.standings.is_empty());
+            assert_eq!(
+                (private.final_run, private.final_run_playing),
+                (None, true),
+                "only the organisers see how far the final run has played"
+            );
             assert_eq!(tick(&db, later).await.unwrap().finalized, 1);
             assert_eq!(tick(&db, later).await.unwrap(), TickReport::default());
             let c = db.get_competition("c").await.unwrap().unwrap();
@@ -1654,6 +1751,7 @@ pub async fn export_files(storage: &Storage, c: &CompetitionRow) -> Result<Vec<(
         max_selected: c.max_selected as u32,
         reveal_private_mazes: c.reveal_private_mazes,
         limits: c.limit_set(),
+        validation: crate::competition::Validation::parse(&c.validation),
         mazes: sets,
     };
     let text = toml::to_string(&spec).map_err(|e| {

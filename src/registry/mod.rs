@@ -24,6 +24,8 @@ pub mod bots;
 pub mod bundles;
 pub mod cache;
 pub mod competitions;
+pub mod entrants;
+pub mod invites;
 pub mod mazes;
 pub mod migrate;
 pub mod owners;

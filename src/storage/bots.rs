@@ -517,7 +517,9 @@ async fn insert_bot(
     .await
     .map_err(|e| {
         if is_unique_violation(&e) {
-            StorageError::Conflict(format!("a bot named {name:?} exists already"))
+            StorageError::Conflict(format!(
+                "a bot named {name:?} exists already (names that differ only in case are one name)"
+            ))
         } else {
             e.into()
         }

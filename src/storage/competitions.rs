@@ -67,6 +67,11 @@ pub struct CompetitionRow {
     pub created_at: i64,
     /// The organiser it belongs to (`None`: the admin's).
     pub organiser_id: Option<i64>,
+    /// Its own invite code (its organiser's to see), if it has one.
+    pub invite_code: Option<String>,
+    /// How each new version is checked: `start`, `match` or `off`
+    /// ([`crate::competition::Validation`]).
+    pub validation: String,
 }
 
 impl CompetitionRow {
@@ -106,7 +111,8 @@ impl CompetitionRow {
 const COMPETITION_COLUMNS: &str = "competition_id, name, title, description, rules, kind, repeats,
     final_repeats, limits, opens_at, closes_at, freeze_ms, versions_per_day, practice_per_day,
     selection, max_selected, reveal_private_mazes, seeds, state, public_tournament_id,
-    private_tournament_id, final_tournament_id, finalized_at, created_at, organiser_id";
+    private_tournament_id, final_tournament_id, finalized_at, created_at, organiser_id,
+    invite_code, validation";
 
 /// A maze of a competition.
 #[derive(Debug, Clone, PartialEq, FromRow)]
@@ -311,9 +317,9 @@ impl Storage {
             "insert into competition (name, title, description, rules, kind, repeats, final_repeats,
                  limits, opens_at, closes_at, freeze_ms, versions_per_day, practice_per_day,
                  selection, max_selected, reveal_private_mazes, seeds, public_tournament_id,
-                 private_tournament_id, created_at, organiser_id)
+                 private_tournament_id, created_at, organiser_id, validation)
              values ($1, $2, $3, $4, 'competition', $5, $6, $7, $8, $9, $10, $11, $12, $13, $14,
-                 $15, $16, $17, $18, $19, $20)
+                 $15, $16, $17, $18, $19, $20, $21)
              returning competition_id",
         )
         .bind(&spec.name)
@@ -336,11 +342,12 @@ impl Storage {
         .bind(tournaments[1])
         .bind(now)
         .bind(organiser_id)
+        .bind(spec.validation.as_str())
         .fetch_one(&mut *tx)
         .await
         .map_err(|e| {
             if is_unique_violation(&e) {
-                StorageError::Conflict(format!("a competition named {:?} exists already", spec.name))
+                StorageError::Conflict(format!("a competition named {:?} exists already (names that differ only in case are one name)", spec.name))
             } else {
                 e.into()
             }
@@ -440,7 +447,7 @@ impl Storage {
             "update competition set title = $2, description = $3, rules = $4, opens_at = $5,
                  closes_at = $6, freeze_ms = $7, versions_per_day = $8, practice_per_day = $9,
                  selection = $10, max_selected = $11, final_repeats = $12,
-                 reveal_private_mazes = $13, limits = $14
+                 reveal_private_mazes = $13, limits = $14, validation = $15
              where competition_id = $1",
         )
         .bind(row.competition_id)
@@ -457,6 +464,7 @@ impl Storage {
         .bind(row.final_repeats)
         .bind(i64::from(row.reveal_private_mazes))
         .bind(&row.limits)
+        .bind(&row.validation)
         .execute(&mut *tx)
         .await?;
         sqlx::query("update tournament set limits = $2 where competition_id = $1")
@@ -535,7 +543,7 @@ impl Storage {
         .await
         .map_err(|e| {
             if is_unique_violation(&e) {
-                StorageError::Conflict(format!("an organiser named {name:?} exists already"))
+                StorageError::Conflict(format!("an organiser named {name:?} exists already (names that differ only in case are one name)"))
             } else {
                 e.into()
             }
@@ -553,6 +561,123 @@ impl Storage {
                 .fetch_optional(self.pool())
                 .await?,
         )
+    }
+
+    /// Sets competition `competition_id`'s own invite code to `code` (with its SHA-256
+    /// `hash`), or removes it (`None`): the old code stops working at once.
+    ///
+    /// # Errors
+    /// [`StorageError::Conflict`] when another competition has that code; database
+    /// failures.
+    pub async fn set_competition_invite(
+        &self,
+        competition_id: i64,
+        code: Option<(&str, &str)>,
+    ) -> Result<()> {
+        let _turn = self.write_turn().await;
+        sqlx::query(
+            "update competition set invite_code = $1, invite_hash = $2 where competition_id = $3",
+        )
+        .bind(code.map(|c| c.0))
+        .bind(code.map(|c| c.1))
+        .bind(competition_id)
+        .execute(self.pool())
+        .await
+        .map_err(|e| {
+            if is_unique_violation(&e) {
+                StorageError::Conflict(
+                    "another competition has this invite code: choose another".into(),
+                )
+            } else {
+                e.into()
+            }
+        })?;
+        Ok(())
+    }
+
+    /// The competition whose own invite code has SHA-256 `hash`.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn competition_by_invite(&self, hash: &str) -> Result<Option<CompetitionRow>> {
+        Ok(sqlx::query_as(&format!(
+            "select {COMPETITION_COLUMNS} from competition where invite_hash = $1"
+        ))
+        .bind(hash)
+        .fetch_optional(self.pool())
+        .await?)
+    }
+
+    /// Adds maze `maze_id` to competition `competition_id`'s practice set, last.
+    ///
+    /// # Errors
+    /// [`StorageError::Conflict`] when the maze is in the competition already; database
+    /// failures.
+    pub async fn add_practice_maze(&self, competition_id: i64, maze_id: i64) -> Result<()> {
+        let _turn = self.write_turn().await;
+        sqlx::query(
+            "insert into competition_maze (competition_id, maze_id, maze_set, position)
+             values ($1, $2, 'practice',
+                 (select coalesce(max(position), -1) + 1 from competition_maze
+                  where competition_id = $1 and maze_set = 'practice'))",
+        )
+        .bind(competition_id)
+        .bind(maze_id)
+        .execute(self.pool())
+        .await
+        .map_err(|e| {
+            if is_unique_violation(&e) {
+                StorageError::Conflict("this maze is in the competition already".into())
+            } else {
+                e.into()
+            }
+        })?;
+        Ok(())
+    }
+
+    /// Removes maze `maze_id` from competition `competition_id`'s practice set (its
+    /// matches stay). Returns false if it is not one of its practice mazes.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn remove_practice_maze(&self, competition_id: i64, maze_id: i64) -> Result<bool> {
+        let _turn = self.write_turn().await;
+        Ok(sqlx::query(
+            "delete from competition_maze
+             where competition_id = $1 and maze_id = $2 and maze_set = 'practice'",
+        )
+        .bind(competition_id)
+        .bind(maze_id)
+        .execute(self.pool())
+        .await?
+        .rows_affected()
+            > 0)
+    }
+
+    /// Replaces organiser `organiser_id`'s key (SHA-256 `key_hash`): the old key and
+    /// every browser session opened with it stop working at once. Returns false if there
+    /// is no such organiser.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn rotate_organiser_key(&self, organiser_id: i64, key_hash: &str) -> Result<bool> {
+        let _turn = self.write_turn().await;
+        let mut tx = self.begin_write().await?;
+        sqlx::query(
+            "delete from web_session where key_hash in (
+                 select key_hash from organiser where organiser_id = $1)",
+        )
+        .bind(organiser_id)
+        .execute(&mut *tx)
+        .await?;
+        let changed = sqlx::query("update organiser set key_hash = $1 where organiser_id = $2")
+            .bind(key_hash)
+            .bind(organiser_id)
+            .execute(&mut *tx)
+            .await?
+            .rows_affected();
+        tx.commit().await?;
+        Ok(changed > 0)
     }
 
     /// Every organiser: id, name and when it was registered (unix ms), oldest first.
@@ -1032,7 +1157,10 @@ impl Storage {
     /// Records the final selection and queues the final run of the `selected` versions
     /// on the private mazes ([`CompetitionRow::final_run_repeats`] each, with seeds of
     /// their own: the repeat indexes after the public set's), in a sealed tournament:
-    /// the private set's only matches. Returns false if another server did it first.
+    /// the private set's only matches, queued in an order shuffled by `order` (a random
+    /// number: matches are played in the order they were queued, so that no one can
+    /// tell which entrant's match is playing from how far the run is). Returns false if
+    /// another server did it first.
     ///
     /// # Errors
     /// Database failures.
@@ -1041,6 +1169,7 @@ impl Storage {
         c: &CompetitionRow,
         selected: &[i64],
         private: &[i64],
+        order: u64,
     ) -> Result<bool> {
         let _turn = self.write_turn().await;
         let now = now_ms();
@@ -1078,18 +1207,12 @@ impl Storage {
             .fetch_one(&mut *tx)
             .await?;
             let seeds = c.seed_list();
-            for id in selected {
-                queue_matches(
-                    &mut tx,
-                    t,
-                    *id,
-                    private,
-                    c.repeats..c.repeats + repeats,
-                    &seeds,
-                    now,
-                )
-                .await?;
-            }
+            let mut rows: Vec<MatchToQueue> = selected
+                .iter()
+                .flat_map(|&id| match_rows(id, private, c.repeats..c.repeats + repeats, &seeds))
+                .collect();
+            shuffle(&mut rows, order);
+            insert_matches(&mut tx, t, &rows, now).await?;
             sqlx::query(
                 "update competition set final_tournament_id = $2 where competition_id = $1",
             )
@@ -1225,12 +1348,46 @@ async fn queue_matches(
     seeds: &[i64],
     now: i64,
 ) -> Result<()> {
-    let rows: Vec<(i64, i64, i64)> = repeats
+    let rows = match_rows(bot_version_id, mazes, repeats, seeds);
+    insert_matches(tx, tournament, &rows, now).await
+}
+
+/// A match to queue: version, maze, repeat, seed.
+type MatchToQueue = (i64, i64, i64, i64);
+
+/// The matches of version `bot_version_id` on `mazes`, each repeat in `repeats` with
+/// its seed (the repeat's index in `seeds`).
+fn match_rows(
+    bot_version_id: i64,
+    mazes: &[i64],
+    repeats: std::ops::Range<i64>,
+    seeds: &[i64],
+) -> Vec<MatchToQueue> {
+    repeats
         .flat_map(|r| {
             let seed = seeds.get(r as usize).copied().unwrap_or(r);
-            mazes.iter().map(move |&z| (z, r, seed))
+            mazes.iter().map(move |&z| (bot_version_id, z, r, seed))
         })
-        .collect();
+        .collect()
+}
+
+/// Shuffles `rows` (Fisher-Yates) with a generator seeded by `order`.
+fn shuffle<T>(rows: &mut [T], order: u64) {
+    let mut rng = oorandom::Rand64::new(u128::from(order));
+    for i in (1..rows.len()).rev() {
+        let j = rng.rand_range(0..(i as u64 + 1)) as usize;
+        rows.swap(i, j);
+    }
+}
+
+/// Queues `rows` in tournament `tournament`, in their order (matches are played in the
+/// order they were queued).
+async fn insert_matches(
+    tx: &mut sqlx::Transaction<'_, sqlx::Any>,
+    tournament: i64,
+    rows: &[MatchToQueue],
+    now: i64,
+) -> Result<()> {
     for chunk in rows.chunks(super::ROWS_PER_INSERT) {
         let sql = format!(
             "insert into match (bot_version_id, maze_id, seed, tournament_id, repeat, priority, created_at)
@@ -1238,7 +1395,7 @@ async fn queue_matches(
             super::placeholders(chunk.len(), 7)
         );
         let mut query = sqlx::query(&sql);
-        for &(maze_id, repeat, seed) in chunk {
+        for &(bot_version_id, maze_id, repeat, seed) in chunk {
             query = query
                 .bind(bot_version_id)
                 .bind(maze_id)
@@ -1251,4 +1408,37 @@ async fn queue_matches(
         query.execute(&mut **tx).await?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{match_rows, shuffle};
+
+    #[test]
+    fn the_final_runs_order_is_a_permutation_that_its_random_number_decides() {
+        let rows: Vec<_> = [11, 12, 13]
+            .iter()
+            .flat_map(|&v| match_rows(v, &[1, 2], 4..6, &[0, 0, 0, 0, 40, 50]))
+            .collect();
+        assert_eq!(rows.len(), 12);
+        assert_eq!(rows[0], (11, 1, 4, 40));
+        assert_eq!(rows[3], (11, 2, 5, 50));
+        let mut a = rows.clone();
+        shuffle(&mut a, 7);
+        let mut b = rows.clone();
+        shuffle(&mut b, 8);
+        assert_ne!(a, rows, "the order moved");
+        assert_ne!(a, b, "another number, another order");
+        let mut again = rows.clone();
+        shuffle(&mut again, 7);
+        assert_eq!(a, again, "the same number, the same order");
+        // Not one version's matches after another's: the run's progress would say
+        // whose match is playing.
+        let grouped = a.chunks(4).all(|c| c.iter().all(|r| r.0 == c[0].0));
+        assert!(!grouped, "{a:?}");
+        let mut sorted = rows.clone();
+        sorted.sort_unstable();
+        a.sort_unstable();
+        assert_eq!(a, sorted, "every match once");
+    }
 }

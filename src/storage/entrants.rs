@@ -35,7 +35,8 @@ pub enum Registration {
 const COLUMNS: &str = "entrant_id, name, members, created_at, key_rotated_at";
 
 impl Storage {
-    /// Registers an entrant whose key has SHA-256 `key_hash`.
+    /// Registers an entrant whose key has SHA-256 `key_hash` (through the invite code of
+    /// competition `registered_through`, if given).
     ///
     /// # Errors
     /// [`StorageError::Conflict`] when the name is taken; database failures.
@@ -44,21 +45,23 @@ impl Storage {
         name: &str,
         members_json: &str,
         key_hash: &str,
+        registered_through: Option<i64>,
     ) -> Result<EntrantRow> {
         let _turn = self.write_turn().await;
         sqlx::query_as(&format!(
-            "insert into entrant (name, members, key_hash, created_at) values ($1, $2, $3, $4)
-             returning {COLUMNS}"
+            "insert into entrant (name, members, key_hash, created_at, registered_through)
+             values ($1, $2, $3, $4, $5) returning {COLUMNS}"
         ))
         .bind(name)
         .bind(members_json)
         .bind(key_hash)
         .bind(now_ms())
+        .bind(registered_through)
         .fetch_one(self.pool())
         .await
         .map_err(|e| {
             if is_unique_violation(&e) {
-                StorageError::Conflict(format!("an entrant named {name:?} exists already"))
+                StorageError::Conflict(format!("an entrant named {name:?} exists already (names that differ only in case are one name)"))
             } else {
                 e.into()
             }
@@ -128,6 +131,65 @@ impl Storage {
         Ok(())
     }
 
+    /// Entrants whose name or members' names hold `search` (any case; empty: all), by
+    /// name, at most `limit`; and how many match in all.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn find_entrants(&self, search: &str, limit: i64) -> Result<(Vec<EntrantRow>, i64)> {
+        let pattern = like_pattern(search);
+        let filter = "lower(name) like $1 escape '\\' or lower(members) like $1 escape '\\'";
+        let rows = sqlx::query_as(&format!(
+            "select {COLUMNS} from entrant where {filter} order by lower(name) limit $2"
+        ))
+        .bind(&pattern)
+        .bind(limit)
+        .fetch_all(self.pool())
+        .await?;
+        let total: i64 =
+            sqlx::query_scalar(&format!("select count(*) from entrant where {filter}"))
+                .bind(&pattern)
+                .fetch_one(self.pool())
+                .await?;
+        Ok((rows, total))
+    }
+
+    /// The entrants that registered with competition `competition_id`'s invite code and
+    /// have no bot in it yet: id and name, by name.
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn registered_without_entry(
+        &self,
+        competition_id: i64,
+    ) -> Result<Vec<(i64, String)>> {
+        Ok(sqlx::query_as(
+            "select entrant_id, name from entrant
+             where registered_through = $1
+               and entrant_id not in (select entrant_id from competition_entry where competition_id = $1)
+             order by lower(name)",
+        )
+        .bind(competition_id)
+        .fetch_all(self.pool())
+        .await?)
+    }
+
+    /// The competitions entrant `entrant_id` has a bot in, or registered through (its
+    /// invite code): each one's organiser (none: the admin's).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn organisers_of_entrant(&self, entrant_id: i64) -> Result<Vec<Option<i64>>> {
+        Ok(sqlx::query_scalar(
+            "select c.organiser_id from competition c
+             where c.competition_id in (select competition_id from competition_entry where entrant_id = $1)
+                or c.competition_id = (select registered_through from entrant where entrant_id = $1)",
+        )
+        .bind(entrant_id)
+        .fetch_all(self.pool())
+        .await?)
+    }
+
     /// The bots of entrant `entrant_id`: id and name, oldest first.
     ///
     /// # Errors
@@ -193,6 +255,20 @@ impl Storage {
     }
 }
 
+/// `search` as a LIKE pattern that matches it anywhere, in lower case, its own `%`, `_`
+/// and `\` taken literally (with `escape '\'`).
+fn like_pattern(search: &str) -> String {
+    let mut p = String::from("%");
+    for c in search.trim().to_lowercase().chars() {
+        if matches!(c, '%' | '_' | '\\') {
+            p.push('\\');
+        }
+        p.push(c);
+    }
+    p.push('%');
+    p
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,11 +277,27 @@ mod tests {
     #[tokio::test]
     async fn an_entrants_key_acts_for_its_bots_and_a_rotated_key_no_longer_does() {
         for (db, _guard) in backends().await {
-            let e = db.create_entrant("team", r#"["ada"]"#, "k1").await.unwrap();
+            let e = db
+                .create_entrant("team", r#"["ada"]"#, "k1", None)
+                .await
+                .unwrap();
             assert!(matches!(
-                db.create_entrant("team", "[]", "k2").await,
+                db.create_entrant("team", "[]", "k2", None).await,
                 Err(StorageError::Conflict(_))
             ));
+            assert!(
+                matches!(
+                    db.create_entrant("TeAm", "[]", "k3", None).await,
+                    Err(StorageError::Conflict(_))
+                ),
+                "names that differ only in case are one name"
+            );
+            // Found by name or member, in any case; a search's `%` and `_` are literal.
+            let (found, total) = db.find_entrants("ADA", 10).await.unwrap();
+            assert_eq!((found.len(), total, found[0].name.as_str()), (1, 1, "team"));
+            assert_eq!(db.find_entrants("", 10).await.unwrap().1, 1);
+            assert_eq!(db.find_entrants("t%m", 10).await.unwrap().1, 0);
+            assert_eq!(db.find_entrants("t_am", 10).await.unwrap().1, 0);
             let bot = db
                 .create_bot("b", "own", &plain_version())
                 .await

@@ -68,6 +68,9 @@ pub struct MatchRow {
     pub started_at: Option<i64>,
     /// Finished at (unix ms).
     pub finished_at: Option<i64>,
+    /// When its stored replay was removed to save space (an old practice match; none:
+    /// never).
+    pub record_pruned_at: Option<i64>,
     /// Whether its tournament is sealed (a competition's private set before the close,
     /// its final run before the results): for the admin and organisers only.
     #[sqlx(try_from = "super::Flag")]
@@ -104,10 +107,10 @@ impl MatchRow {
         self
     }
 
-    /// Whether the match was played but its stored trace is gone (`record`, as
-    /// [`Storage::get_record`] gave it): an old practice match, pruned.
-    pub fn trace_removed(&self, record: Option<&MatchRecord>) -> bool {
-        self.total_steps.is_some_and(|n| n > 0) && record.is_none_or(|r| r.trace.is_empty())
+    /// Whether its stored replay was removed to save space (an old practice match,
+    /// pruned): only then, not for a match that ended before its bot's first move.
+    pub fn trace_removed(&self) -> bool {
+        self.record_pruned_at.is_some()
     }
 
     /// The row's summary of the record (empty while the match is not played; a summary
@@ -403,7 +406,7 @@ pub struct Page {
 const MATCH_COLUMNS: &str = "m.match_id, m.bot_version_id, v.bot_id, b.name as bot_name, v.version, m.maze_id,
         z.name as maze_name, z.hidden as maze_hidden, z.hash as maze_hash, z.dim as maze_dim, m.seed, m.tournament_id, m.repeat, m.status, m.attempts, m.lease_expiries, m.score,
         m.run0_steps, m.run1_steps, m.total_steps, m.record, m.created_at, m.started_at, m.finished_at,
-        coalesce((select t.sealed from tournament t where t.tournament_id = m.tournament_id), 0) as sealed";
+        m.record_pruned_at, coalesce((select t.sealed from tournament t where t.tournament_id = m.tournament_id), 0) as sealed";
 
 impl Storage {
     /// The select of a match with its names, for a where clause on `match m` to follow.
@@ -538,6 +541,15 @@ impl Storage {
         )
         .bind(before_ms)
         .fetch_one(&mut *tx)
+        .await?;
+        sqlx::query(
+            "update match set record_pruned_at = $2
+             where tournament_id is null and finished_at < $1 and record_pruned_at is null
+               and match_id in (select match_id from match_record)",
+        )
+        .bind(before_ms)
+        .bind(now_ms())
+        .execute(&mut *tx)
         .await?;
         sqlx::query(
             "delete from match_record where match_id in (
@@ -1248,7 +1260,19 @@ mod tests {
             assert_eq!(count, 1, "only the practice match's record goes");
             assert!(bytes > 0);
             assert_eq!(boards().await, before, "a standing changed");
-            assert_eq!(db.get_match(single).await.unwrap().unwrap(), row_before);
+            assert!(!row_before.trace_removed());
+            let row_after = db.get_match(single).await.unwrap().unwrap();
+            assert!(
+                row_after.trace_removed(),
+                "the row says its replay was removed"
+            );
+            assert_eq!(
+                MatchRow {
+                    record_pruned_at: None,
+                    ..row_after
+                },
+                row_before
+            );
             let left = db.get_record(single).await.unwrap();
             assert!(
                 left.as_ref().is_none_or(|r| r.stderr_tail.is_empty()),

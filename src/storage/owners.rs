@@ -301,7 +301,7 @@ mod tests {
                 "{refused:?}"
             );
             // An entrant's bots count together.
-            let e = db.create_entrant("team", "[]", "hk").await.unwrap();
+            let e = db.create_entrant("team", "[]", "hk", None).await.unwrap();
             let mine = OwnerLimits {
                 owner: Owner::Entrant(e.entrant_id),
                 most_pending: Some(1),

@@ -54,6 +54,20 @@ pub struct SupersededRow {
     pub finished_at: Option<i64>,
 }
 
+impl SupersededRow {
+    /// The row as anyone but the admin may see an earlier outcome on a hidden maze,
+    /// under the rules of the match's own row ([`super::matches::MatchRow::redacted`]):
+    /// its status only, no score, steps or end time.
+    pub fn redacted(self) -> SupersededRow {
+        SupersededRow {
+            score: None,
+            total_steps: None,
+            finished_at: None,
+            ..self
+        }
+    }
+}
+
 impl Storage {
     /// Plays again the ended ranking matches (of the public, private and final-run sets)
     /// of competition `c` that `target` names, keeping their earlier outcomes; answers

@@ -5,6 +5,11 @@ use maud::{DOCTYPE, Markup, PreEscaped, html};
 /// The site's styles.
 pub const SITE_CSS: &str = include_str!("assets/site.css");
 
+/// The `pattern` of a name field (entrant, bot): letters, digits, `.`, `_`
+/// and `-`. Browsers compile patterns with the `v` flag, where a `-` in a class must
+/// be escaped (unescaped, the pattern is invalid and the field is not checked at all).
+pub const NAME_PATTERN: &str = r"[A-Za-z0-9._\-]+";
+
 /// A whole page: `title` in the head and as the heading's text is given by `body`.
 pub fn page(title: &str, body: Markup) -> String {
     html! {
@@ -18,6 +23,7 @@ pub fn page(title: &str, body: Markup) -> String {
                 style { (PreEscaped(SITE_CSS)) }
             }
             body {
+                a.skip href="#main" { "Skip to the content" }
                 header.site {
                     a.brand href="/" { "mazearena" }
                     a href="/" { "Leaderboard" }
@@ -30,7 +36,7 @@ pub fn page(title: &str, body: Markup) -> String {
                     a href="/api" { "API" }
                     a.me href="/me" { "My page" }
                 }
-                main { (body) }
+                main #main tabindex="-1" { (body) }
             }
         }
     }

@@ -8,9 +8,10 @@ use base64::Engine;
 use sha2::{Digest, Sha256};
 
 /// The texts of every inline script of the pages.
-pub fn inline_scripts() -> [&'static str; 5] {
+pub fn inline_scripts() -> [&'static str; 6] {
     [
         super::pages::PROGRESS_JS,
+        super::pages::account::SUBMIT_FORM_JS,
         super::pages::MY_SUBMISSIONS_JS,
         super::pages::MATCH_STDERR_JS,
         super::pages::OWNER_LOGS_JS,

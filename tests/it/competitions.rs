@@ -1205,6 +1205,39 @@ async fn a_rejudge_plays_matches_again_keeps_the_earlier_records_and_counts_the_
             kept[0]["score"], full["score"],
             "the same bot, the same seed"
         );
+        // The private mazes stay hidden: an earlier outcome shows what the match's own
+        // row shows to anyone but the admin (its status only), in the API and the page.
+        assert!(
+            kept[0]["total_steps"].as_i64().is_some_and(|n| n > 0),
+            "{full}"
+        );
+        let (_, seen) = server
+            .get(&format!("/api/matches/{}", m["match_id"]), None)
+            .await;
+        assert_eq!(seen["total_steps"], Value::Null, "{seen}");
+        let earlier = &seen["superseded"][0];
+        assert_eq!(earlier["status"], kept[0]["status"], "{seen}");
+        for field in ["score", "total_steps", "finished_at"] {
+            assert_eq!(earlier[field], Value::Null, "{field}: {seen}");
+        }
+        let page = reqwest::get(format!("{}/matches/{}", server.base, m["match_id"]))
+            .await
+            .unwrap()
+            .text()
+            .await
+            .unwrap();
+        let at = page
+            .find("<tr class=\"superseded\">")
+            .expect("the earlier outcome's row");
+        let row = &page[at..at + page[at..].find("</tr>").unwrap()];
+        let steps = kept[0]["total_steps"].as_i64().unwrap();
+        assert!(
+            !row.contains(&format!(">{steps}<")) && row.contains(">hidden<"),
+            "the earlier outcome's steps on the page: {row}"
+        );
+        let cells: Vec<&str> = row.split("<td").skip(1).collect();
+        assert_eq!(cells.len(), 5, "{row}");
+        assert!(cells[4].starts_with("></td>"), "its end time: {row}");
     }
     // The results written again equal a recount from the match records.
     let out = crate::support::mazearena(&[

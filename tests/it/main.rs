@@ -4,6 +4,7 @@ mod api;
 mod authors;
 mod bots;
 mod browser;
+mod class_day;
 mod cli;
 mod client;
 mod competitions;

@@ -53,6 +53,14 @@ async fn wait_at(b: &Browser, path: &str) {
     }
 }
 
+/// Asserts that a form post ended (post/redirect/get) at `path` with a query that
+/// starts with `query`: a reload shows the page again and posts nothing.
+async fn assert_after_redirect(b: &Browser, path: &str, query: &str) {
+    let url = b.client.current_url().await.unwrap();
+    assert_eq!(url.path(), path, "{url}");
+    assert!(url.query().unwrap_or("").starts_with(query), "{url}");
+}
+
 /// Types `text` into the field `css`.
 async fn fill(b: &Browser, css: &str, text: &str) {
     b.client
@@ -172,7 +180,22 @@ async fn a_student_takes_part_from_the_browser_alone() {
         &[&root().join("tests/fixtures/robot_py/robot.py")],
     )
     .await;
-    b.click("input[name=original_task]").await;
+    // The form reads the chosen robot.py, finds its class Robot and ticks "a robot of
+    // the original task" itself.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while b
+        .client
+        .execute(
+            "return [document.querySelector('input[name=original_task]').checked, document.getElementById('robot-file').value];",
+            vec![],
+        )
+        .await
+        .unwrap()
+        != json!([true, "robot.py"])
+    {
+        assert!(Instant::now() < deadline, "the form did not choose robot.py");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
     b.screenshot("student-3-submit").await;
     b.click("form.submit button[type=submit]").await;
     // The upload's redirect before the page is read again (leaving earlier would cancel it).
@@ -302,6 +325,9 @@ async fn an_organiser_runs_a_competition_from_the_browser() {
         .await
         .unwrap();
     assert_eq!(b.text(".mode").await, "open");
+    // Post/redirect/get: the address bar is the page's, with what was done.
+    assert_after_redirect(&b, "/admin", "done=registration").await;
+    assert_eq!(b.text("p.notice").await, "Registration is now open.");
     b.screenshot("organiser-1-admin").await;
     b.open(&format!("{base}/me"), "form[action='/logout']")
         .await;
@@ -409,6 +435,8 @@ async fn an_organiser_runs_a_competition_from_the_browser() {
         .for_element(Locator::Css("p.notice"))
         .await
         .unwrap();
+    assert_after_redirect(&b, "/competitions/web-cup/manage", "done=saved").await;
+    assert_eq!(b.text("p.notice").await, "Saved.");
     let (_, view) = server.get("/api/competitions/web-cup", None).await;
     assert_eq!(view["versions_per_day"], 3, "{view}");
 
@@ -447,6 +475,7 @@ async fn an_organiser_runs_a_competition_from_the_browser() {
         .unwrap();
     let notice = b.text("p.notice").await;
     assert!(notice.contains("2 matches queued again"), "{notice}");
+    assert_after_redirect(&b, "/competitions/web-cup/manage", "done=rejudged&rejudge=").await;
     let (_, rejudges) = server
         .get("/api/competitions/web-cup/rejudges", Some(&organiser))
         .await;
@@ -472,6 +501,7 @@ async fn an_organiser_runs_a_competition_from_the_browser() {
         assert!(Instant::now() < deadline, "not closed: {notice}");
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
+    assert_after_redirect(&b, "/competitions/web-cup/manage", "done=closed").await;
 
     // The final run's progress, then the results download.
     wait_for(&b, &manage, "a.results-csv", 240).await;

@@ -45,12 +45,17 @@ pub struct BotUpload {
     /// left out with `original_task`).
     #[serde(default)]
     pub command: String,
-    /// The files are a `robot.py` of the original task (and its own modules): the server
+    /// The files are a robot of the original task (and its own modules): the server
     /// adds its adapter, `udacity_adapter.py`, and the command defaults to `python3
-    /// udacity_adapter.py robot.py` (`python ...` with a `runtime`). (Form: `original_task`
+    /// udacity_adapter.py ROBOT_FILE` (`python ...` with a `runtime`). (Form: `original_task`
     /// set to `true` or `on`.)
     #[serde(default)]
     pub original_task: bool,
+    /// With `original_task`: the file that holds `class Robot`, at the top of the files
+    /// (e.g. `robot_final.py`); left out: `robot.py`, or else the only top-level `.py`
+    /// file that defines `class Robot`. The command then names it. (Form: `robot_file`.)
+    #[serde(default)]
+    pub robot_file: Option<String>,
     /// The protocol the bot speaks: `v1` (the default: JSON lines, docs/PROTOCOL.md) or
     /// `mms` (a mouse written for the mms simulator, played unchanged through the
     /// referee's translation: docs/PROTOCOL-mms.md). (Form: `protocol`.)

@@ -25,6 +25,7 @@ pub(crate) struct Upload {
     pub archive: Option<Vec<u8>>,
     pub runtime: Option<String>,
     pub original_task: bool,
+    pub robot_file: Option<String>,
     pub protocol: Option<String>,
 }
 
@@ -57,6 +58,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         let (mut name, mut command, mut archive, mut build) = (None, None, None, None);
         let mut runtime = None;
         let mut original_task = false;
+        let mut robot_file = None;
         let mut protocol = None;
         let mut env = Vec::new();
         while let Some(field) = form.next_field().await? {
@@ -66,6 +68,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "build" => build = Some(field.text().await?),
                 "runtime" => runtime = Some(field.text().await?),
                 "original_task" => original_task = checked(&field.text().await?),
+                "robot_file" => robot_file = Some(field.text().await?),
                 "protocol" => protocol = Some(field.text().await?),
                 "env" => {
                     let text = field.text().await?;
@@ -74,7 +77,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "archive" => archive = Some(field.bytes().await?.to_vec()),
                 other => {
                     return Err(ApiError::BadRequest(format!(
-                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, protocol, archive"
+                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, robot_file, protocol, archive"
                     )));
                 }
             }
@@ -87,6 +90,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
             files: None,
             runtime,
             original_task,
+            robot_file,
             protocol,
             archive: Some(archive.ok_or_else(|| {
                 ApiError::Unprocessable("the form needs an `archive` file field".into())
@@ -113,6 +117,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         archive,
         runtime: body.runtime,
         original_task: body.original_task,
+        robot_file: body.robot_file,
         protocol: body.protocol,
     })
 }
@@ -151,16 +156,25 @@ impl Upload {
                     .into(),
             ));
         }
-        let mut command = self.command.trim().to_string();
+        // An original-task robot without a command gets the adapter's, naming its
+        // robot's file, once the files are stored (the registry finds the file).
+        let command = self.command.trim().to_string();
+        let robot = self.robot_file.filter(|r| !r.trim().is_empty());
+        if robot.is_some() && !self.original_task {
+            return Err(ApiError::Unprocessable(
+                "`robot_file` names the file of an original-task robot: set `original_task` too"
+                    .into(),
+            ));
+        }
         let files = if self.original_task {
-            if command.is_empty() {
-                command = original_task_command(runtime.is_some());
+            BotFiles::OriginalTask {
+                files: Box::new(files),
+                robot,
             }
-            BotFiles::OriginalTask(Box::new(files))
         } else {
             files
         };
-        if command.is_empty() {
+        if command.is_empty() && !self.original_task {
             return Err(ApiError::Unprocessable(
                 "the bot needs a `command` (e.g. `python3 bot.py`), or `original_task` for a \
                  robot.py of the original task"
@@ -179,16 +193,4 @@ impl Upload {
             },
         ))
     }
-}
-
-/// The command of an original-task robot: the adapter run by `python3` (the system's),
-/// or by `python` when the bot chose a runtime (a virtual environment has both names; a
-/// Python 2 one only `python`).
-pub(crate) fn original_task_command(with_runtime: bool) -> String {
-    let python = if with_runtime { "python" } else { "python3" };
-    format!(
-        "{python} {} {}",
-        crate::registry::bundles::ADAPTER_FILE,
-        crate::registry::bundles::ROBOT_FILE
-    )
 }

@@ -12,7 +12,7 @@ use serde::Deserialize;
 use super::super::AppState;
 use super::super::auth::{Caller, hash_token};
 use super::super::bots::upload::{Upload, checked};
-use super::super::error::{ApiError, AppPath};
+use super::super::error::{ApiError, AppPath, AppQuery};
 use super::super::limits;
 use super::super::session::{self, Visitor};
 use super::forms::{
@@ -102,15 +102,66 @@ pub(super) async fn logout(
     Ok(see_other("/", Some(gone)))
 }
 
-async fn register_page_data(state: &AppState) -> PageResult<account::RegisterPage> {
+/// The registration page's data, with the invite code `invite` a link carried: a
+/// competition's (whose title the page shows), the server's, or a wrong one, which
+/// spends the address's budget of guesses when `guess` (the page would otherwise tell
+/// right codes from wrong ones for free).
+async fn register_page_data(
+    state: &AppState,
+    invite: Option<&str>,
+    guess: Option<Option<std::net::IpAddr>>,
+) -> PageResult<account::RegisterPage> {
     let mode = state.storage.registration().await?;
-    Ok(account::RegisterPage {
+    let mut p = account::RegisterPage {
         mode: super::super::entrants::registration_name(&mode).into(),
-    })
+        ..Default::default()
+    };
+    let Some(code) = invite
+        .map(str::trim)
+        .filter(|c| !c.is_empty() && c.len() <= 128)
+    else {
+        return Ok(p);
+    };
+    p.invite = Some(code.to_string());
+    let hash = hash_token(code);
+    match state.storage.competition_by_invite(&hash).await? {
+        Some(c)
+            if crate::registry::competitions::phase(&c, crate::storage::now_ms()).is_closed() =>
+        {
+            p.invite_error = Some(format!(
+                "{} has closed: its invite code registers no one now",
+                c.title
+            ));
+        }
+        Some(c) => p.competition = Some(c.title),
+        None if matches!(&mode, crate::storage::entrants::Registration::Invite(h) if *h == hash) => {
+        }
+        None => {
+            if let Some(client) = guess {
+                limits::spend(state, limits::Spend::WrongInviteCode, client).await?;
+            }
+            p.invite_error = Some(
+                "this invite code is not known on this server: check the link with your organiser"
+                    .into(),
+            );
+        }
+    }
+    Ok(p)
 }
 
-pub(super) async fn register_page(State(state): State<AppState>) -> PageResult<Html<String>> {
-    let p = register_page_data(&state).await?;
+/// The registration page's query: the invite code a link carries.
+#[derive(Debug, Deserialize)]
+pub(super) struct RegisterQuery {
+    invite: Option<String>,
+}
+
+pub(super) async fn register_page(
+    State(state): State<AppState>,
+    AppQuery(q): AppQuery<RegisterQuery>,
+    request: Request,
+) -> PageResult<Html<String>> {
+    let client = client_of(&request);
+    let p = register_page_data(&state, q.invite.as_deref(), Some(client)).await?;
     Ok(Html(account::register(&p, None, "", "")))
 }
 
@@ -131,7 +182,7 @@ pub(super) async fn register(
     let client = client_of(&request);
     let secure = session::secure(&state, request.headers());
     let form: RegisterForm = read_form(&state, request).await?;
-    let p = register_page_data(&state).await?;
+    let p = register_page_data(&state, form.invite_code.as_deref(), None).await?;
     let body = super::super::entrants::EntrantRequest {
         name: form.name.trim().to_string(),
         members: form
@@ -154,7 +205,7 @@ pub(super) async fn register(
     }
     let cookie = session::open(&state, &hash_token(&created.key), secure).await?;
     Ok(key_page(
-        account::registered(&created.name, &created.key),
+        account::registered(&created.name, &created.key, created.competition.as_deref()),
         cookie,
     ))
 }
@@ -201,6 +252,13 @@ pub(super) async fn me_page(State(state): State<AppState>, visitor: Visitor) -> 
     if let Some(r) = login_first(&visitor, "/me") {
         return Ok(r);
     }
+    let page = me_data(&state, &visitor).await?;
+    Ok(Html(account::me(&page)).into_response())
+}
+
+/// The "me" page's data for a signed-in `visitor`.
+async fn me_data(state: &AppState, visitor: &Visitor) -> PageResult<account::MePage> {
+    let state = state.clone();
     let caller = &visitor.caller;
     let (who, kind) = who(&state, caller).await?;
     let owned = match caller {
@@ -323,8 +381,9 @@ pub(super) async fn me_page(State(state): State<AppState>, visitor: Visitor) -> 
         matches: matches.into_iter().map(super::line).collect(),
         live,
         uploads_quota,
+        key_error: None,
     };
-    Ok(Html(account::me(&page)).into_response())
+    Ok(page)
 }
 
 /// The practice button's form: the fields of `POST /api/matches`.
@@ -390,19 +449,7 @@ async fn submit_data(
         .runtimes
         .iter()
         .filter(|r| r.kind == "operator")
-        .map(|r| {
-            let programs: Vec<String> = r
-                .programs
-                .iter()
-                .map(|p| format!("{} {}", p.program, p.version))
-                .collect();
-            let packages: Vec<String> = r.packages.iter().take(8).map(|p| p.name.clone()).collect();
-            let mut what = programs.join(", ");
-            if !packages.is_empty() {
-                what.push_str(&format!(" with {}", packages.join(", ")));
-            }
-            (r.name.clone(), what)
-        })
+        .map(|r| (r.name.clone(), account::runtime_words(r)))
         .collect();
     Ok(account::SubmitPage {
         competition: c.name,
@@ -452,6 +499,7 @@ async fn read_submission(
             "original_task" => {
                 upload.original_task = checked(&field.text().await.map_err(ApiError::from)?)
             }
+            "robot_file" => upload.robot_file = Some(field.text().await.map_err(ApiError::from)?),
             "files" => {
                 let file_name = field.file_name().unwrap_or("").to_string();
                 let bytes = field.bytes().await.map_err(ApiError::from)?;
@@ -490,6 +538,10 @@ async fn read_submission(
     }
     if !files.is_empty() {
         upload.files = Some(files);
+    }
+    // The form's list of the robot's file counts only for an original-task robot.
+    if !upload.original_task {
+        upload.robot_file = None;
     }
     if upload.files.is_some() && upload.archive.is_some() {
         return Err(PageError::new(
@@ -536,15 +588,47 @@ pub(super) async fn submit(
     Ok(see_other(&format!("/me#competition-{name}"), None))
 }
 
+/// The "replace my key" form: the current key, which the session alone does not prove.
+#[derive(Debug, Deserialize)]
+struct RotateForm {
+    csrf: Option<String>,
+    current_key: Option<String>,
+}
+
 pub(super) async fn rotate_key(
     State(state): State<AppState>,
     visitor: Visitor,
     request: Request,
 ) -> PageResult {
+    let client = client_of(&request);
     let secure = session::secure(&state, request.headers());
-    let form: TokenForm = read_form(&state, request).await?;
+    let form: RotateForm = read_form(&state, request).await?;
     visitor.check_csrf(form.csrf.as_deref())?;
     let e = super::super::competitions::entrant(&state, &visitor.caller).await?;
+    // A copied session cookie must not become a key of its own: replacing the key
+    // asks for the key itself. A wrong one spends the address's budget of guesses.
+    let current = form.current_key.as_deref().unwrap_or("").trim();
+    let right = matches!(&visitor.caller, Caller::Token(hash) if !current.is_empty()
+        && bool::from(subtle::ConstantTimeEq::ct_eq(hash_token(current).as_bytes(), hash.as_bytes())));
+    if !right {
+        let data = me_data(&state, &visitor).await?;
+        let again = move |m: &str| {
+            account::me(&account::MePage {
+                key_error: Some(m.to_string()),
+                ..data.clone()
+            })
+        };
+        if !current.is_empty() {
+            limits::spend(&state, limits::Spend::WrongKey, client)
+                .await
+                .map_err(|e| PageError::from(e).with_page(&again))?;
+        }
+        return Err(PageError::new(
+            StatusCode::FORBIDDEN,
+            "that is not your current key: paste the key you log in with to replace it (a lost key is replaced by the admin or your competition's organiser)",
+        )
+        .with_page(&again));
+    }
     let new = super::super::entrants::rotate(&state, &visitor.caller, e.entrant_id).await?;
     // This session ended with the old key: the visitor goes on with a new one.
     let cookie = session::open(&state, &hash_token(&new.key), secure).await?;

@@ -7,9 +7,10 @@ use axum::response::Html;
 use super::super::AppState;
 use super::super::auth::Caller;
 use super::super::competitions::{CompetitionView, view};
-use super::super::error::{ApiError, ApiResult, AppPath};
+use super::super::error::{ApiError, ApiResult, AppPath, AppQuery};
 use crate::registry::competitions::{self as ops, BoardKind};
 use crate::web::pages::{self as web, CompetitionSummary};
+use serde::Deserialize;
 
 fn summary(v: &CompetitionView) -> CompetitionSummary {
     let when = |t: Option<crate::competition::Timestamp>| t.map(|t| t.words());
@@ -34,10 +35,22 @@ pub(super) async fn competitions_page(State(state): State<AppState>) -> ApiResul
     Ok(Html(web::competitions(&rows)))
 }
 
+/// A competition page's query: the invite code its organiser's link carries.
+#[derive(Debug, Deserialize)]
+pub(super) struct InviteQuery {
+    invite: Option<String>,
+}
+
 pub(super) async fn competition_page(
     State(state): State<AppState>,
     AppPath(name): AppPath<String>,
+    AppQuery(q): AppQuery<InviteQuery>,
 ) -> ApiResult<Html<String>> {
+    // Carried on to the registration as it is (never checked here: the registration
+    // page checks it, and spends a guess on a wrong one); only a code a link can carry.
+    let invite = q
+        .invite
+        .filter(|code| crate::registry::invites::valid(code));
     let c = state
         .storage
         .get_competition(&name)
@@ -173,6 +186,7 @@ pub(super) async fn competition_page(
         public,
         private,
         results,
+        invite,
     })))
 }
 

@@ -290,9 +290,15 @@ async fn match_page(
     // admin's); for anyone else it is left out, and the page's owner form fetches it
     // from the API with a pasted token.
     let owner = visitor.signed_in() && visitor.caller.owns(&state, row.bot_id).await?;
-    let pruned = !hidden && row.trace_removed(stored.as_ref());
+    let pruned = !hidden && row.trace_removed();
+    // The end of the bot's stderr, for its owner, whatever the match's status (a crash
+    // at its first step has no replay to show it in).
+    let stderr_tail = stored
+        .as_ref()
+        .filter(|_| owner)
+        .map(|r| r.stderr_tail.clone());
     if let Some(mut r) = stored
-        .filter(|_| row.total_steps.is_some() && !pruned)
+        .filter(|r| !pruned && !r.trace.is_empty())
         .map(|r| if owner { r } else { r.without_stderr() })
     {
         let m = super::mazes::find_maze(&state, row.maze_id).await?;
@@ -305,7 +311,7 @@ async fn match_page(
         "match {id}: {} on {} (seed {})",
         line.row.bot_name, line.row.maze_name, line.row.seed
     );
-    let superseded = state.storage.superseded(id).await?;
+    let superseded = super::matches::superseded(&state, id, !hidden).await?;
     let viewer = record.as_ref().map(|r| ViewerData {
         stderr_hidden: !owner,
         ..ViewerData::new(title, r, maze.as_ref(), format!("match-{id}.json"))
@@ -315,6 +321,7 @@ async fn match_page(
         viewer,
         pruned,
         owner,
+        stderr_tail,
         superseded,
     })))
 }

@@ -14,7 +14,7 @@ use serde::Deserialize;
 
 use super::super::AppState;
 use super::super::auth::Caller;
-use super::super::error::{ApiError, AppPath};
+use super::super::error::{ApiError, AppPath, AppQuery};
 use super::super::session::Visitor;
 use super::forms::{PageError, PageResult, login_first, read_form, see_other};
 use crate::competition::{MazeText, Spec, Timestamp};
@@ -34,6 +34,14 @@ pub(super) fn router() -> Router<AppState> {
         .route("/competitions/{name}/edit", post(edit))
         .route("/competitions/{name}/close", post(close))
         .route("/competitions/{name}/rejudge", post(rejudge))
+        .route("/competitions/{name}/invite", post(invite))
+        .route(
+            "/competitions/{name}/practice",
+            post(practice).layer(DefaultBodyLimit::max(MAX_MAZE_FORM_BYTES)),
+        )
+        .route("/competitions/{name}/entrants/{id}/key", post(entrant_key))
+        .route("/admin/entrants/{id}/key", post(admin_entrant_key))
+        .route("/admin/organisers/{id}/key", post(admin_organiser_key))
         .route("/competitions/{name}/export.tar.gz", get(export))
         .route("/admin", get(admin_page))
         .route("/admin/registration", post(set_registration))
@@ -252,6 +260,7 @@ async fn manage_data(
         let vq = ops::version_quota(&state.storage, &c, e.entrant_id, now).await?;
         let pq = ops::practice_quota(&state.storage, &c, e.entrant_id, now).await?;
         entrants.push(web::EntrantLine {
+            entrant_id: e.entrant_id,
             entrant: e.entrant_name,
             bot: (e.bot_id, e.bot_name),
             versions,
@@ -277,6 +286,15 @@ async fn manage_data(
         versions_per_day: c.versions_per_day,
         practice_per_day: c.practice_per_day,
         entrants,
+        registered: state
+            .storage
+            .registered_without_entry(c.competition_id)
+            .await?,
+        invite: c
+            .invite_code
+            .as_deref()
+            .map(|code| (code.to_string(), crate::registry::invites::link(&c, code))),
+        validation: c.validation.clone(),
         work_left: state.storage.competition_work_left(&c).await?,
         final_run: ops::final_progress(&state.storage, &c)
             .await?
@@ -294,19 +312,271 @@ async fn manage_data(
     })
 }
 
+/// What a form of the manage page did: after it, the browser is sent back to the page
+/// (post/redirect/get: a reload does not post again), which says so.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum Done {
+    /// The times and quotas were saved.
+    Saved,
+    /// The competition was closed.
+    Closed,
+    /// A rejudge was queued (its id in `rejudge`).
+    Rejudged,
+    /// The invite code was set or replaced.
+    Invite,
+    /// The invite code was removed.
+    InviteRemoved,
+    /// A practice maze was added.
+    PracticeAdded,
+    /// A practice maze was removed.
+    PracticeRemoved,
+}
+
+/// The manage page's query: what the last form did (a fixed word, never text to show).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DoneQuery {
+    done: Option<Done>,
+    rejudge: Option<i64>,
+}
+
 async fn manage_page(
     State(state): State<AppState>,
     visitor: Visitor,
     AppPath(name): AppPath<String>,
+    AppQuery(q): AppQuery<DoneQuery>,
 ) -> PageResult {
     if let Some(r) = login_first(&visitor, &format!("/competitions/{name}/manage")) {
         return Ok(r);
     }
-    let p = manage_data(&state, &visitor, &name, None).await?;
+    let mut p = manage_data(&state, &visitor, &name, None).await?;
+    p.notice = match q.done {
+        Some(Done::Saved) => Some("Saved.".to_string()),
+        Some(Done::Closed) => {
+            Some("Closed: the final selection and the final run follow.".to_string())
+        }
+        Some(Done::Rejudged) => p
+            .rejudges
+            .iter()
+            .find(|r| Some(r.rejudge_id) == q.rejudge)
+            .map(|r| {
+                format!(
+                    "Rejudge {}: {} matches queued again; their earlier records are kept.",
+                    r.rejudge_id, r.matches
+                )
+            }),
+        Some(Done::Invite) => Some(
+            "The invite code is set: the old one no longer registers anyone. Give the class the new link."
+                .to_string(),
+        ),
+        Some(Done::InviteRemoved) => Some("The invite code is removed.".to_string()),
+        Some(Done::PracticeAdded) => Some(
+            "The practice maze is added: entrants practise on it, and new versions are validated on the practice mazes in order."
+                .to_string(),
+        ),
+        Some(Done::PracticeRemoved) => Some("The practice maze is removed.".to_string()),
+        None => None,
+    };
     Ok(Html(web::manage(&p)).into_response())
 }
 
-/// Answers the manage page again with `result`'s notice or error.
+/// The invite code's forms: `action` is `set` (with `invite_code`, or empty for a
+/// random code) or `remove`.
+#[derive(Debug, Deserialize)]
+struct InviteForm {
+    csrf: Option<String>,
+    action: String,
+    #[serde(default)]
+    invite_code: String,
+}
+
+async fn invite(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath(name): AppPath<String>,
+    request: Request,
+) -> PageResult {
+    let form: InviteForm = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    let caller = &visitor.caller;
+    let result = match form.action.as_str() {
+        "set" => {
+            let code = Some(form.invite_code.as_str()).filter(|c| !c.trim().is_empty());
+            super::super::invites::set(&state, caller, &name, code)
+                .await
+                .map(|_| "invite".to_string())
+                .map_err(PageError::from)
+        }
+        "remove" => super::super::invites::remove(&state, caller, &name)
+            .await
+            .map(|()| "invite_removed".to_string())
+            .map_err(PageError::from),
+        other => Err(PageError::new(
+            StatusCode::BAD_REQUEST,
+            format!("unknown action {other:?}: set or remove"),
+        )),
+    };
+    manage_after(&state, &visitor, &name, result).await
+}
+
+/// The practice mazes' forms: a `remove` field (a maze id), or a `maze` file to add
+/// (multipart, after the form's token).
+async fn practice(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath(name): AppPath<String>,
+    request: Request,
+) -> PageResult {
+    let caller = visitor.caller.clone();
+    let is_multipart = request
+        .headers()
+        .get(axum::http::header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.to_ascii_lowercase().starts_with("multipart/form-data"));
+    let result = if is_multipart {
+        let mut form = super::forms::multipart_after_token(&state, &visitor, request).await?;
+        let mut maze = None;
+        while let Some(field) = form.next_field().await.map_err(ApiError::from)? {
+            if field.name() != Some("maze") {
+                return Err(PageError::new(
+                    StatusCode::BAD_REQUEST,
+                    "the form has an unknown field: expected csrf and maze",
+                ));
+            }
+            let file_name = field.file_name().unwrap_or("practice").to_string();
+            let bytes = field.bytes().await.map_err(ApiError::from)?;
+            let layout = String::from_utf8(bytes.to_vec()).map_err(|_| {
+                PageError::new(
+                    StatusCode::UNPROCESSABLE_ENTITY,
+                    format!("{file_name} is not a maze file (not text)"),
+                )
+            })?;
+            let stem = Path::new(&file_name)
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "practice".into());
+            maze = Some(MazeText { name: stem, layout });
+        }
+        match maze {
+            Some(m) => super::super::practice::add(&state, &caller, &name, &m)
+                .await
+                .map(|_| "practice_added".to_string())
+                .map_err(PageError::from),
+            None => Err(PageError::new(
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "choose a maze file to add",
+            )),
+        }
+    } else {
+        let form: PracticeRemoveForm = read_form(&state, request).await?;
+        visitor.check_csrf(form.csrf.as_deref())?;
+        super::super::practice::remove(&state, &caller, &name, form.remove)
+            .await
+            .map(|()| "practice_removed".to_string())
+            .map_err(PageError::from)
+    };
+    manage_after(&state, &visitor, &name, result).await
+}
+
+/// The largest practice maze form: a maze file and the form's token, with room for
+/// the multipart framing.
+const MAX_MAZE_FORM_BYTES: usize = crate::engine::mazefile::MAX_FILE_BYTES + 16 * 1024;
+
+/// The practice maze's remove form.
+#[derive(Debug, Deserialize)]
+struct PracticeRemoveForm {
+    csrf: Option<String>,
+    remove: i64,
+}
+
+/// A page that shows a key handed over (no cache keeps it).
+fn handed_over(html: String) -> PageResult {
+    let mut response = Html(html).into_response();
+    response.headers_mut().insert(
+        axum::http::header::CACHE_CONTROL,
+        axum::http::HeaderValue::from_static("no-store"),
+    );
+    Ok(response)
+}
+
+/// A form with nothing but its anti-forgery token.
+#[derive(Debug, Deserialize)]
+struct TokenOnly {
+    csrf: Option<String>,
+}
+
+/// The organiser's (or the admin's) "new key" for an entrant of the competition: the
+/// key is shown once, to be handed over.
+async fn entrant_key(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath((name, id)): AppPath<(String, i64)>,
+    request: Request,
+) -> PageResult {
+    let form: TokenOnly = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    let c = super::super::competitions::find(&state, &name).await?;
+    visitor.caller.require_organiser_of(&c)?;
+    let back = format!("/competitions/{name}/manage");
+    new_entrant_key(&state, &visitor, id, &back).await
+}
+
+/// A new key for entrant `id` by `visitor` (the API's rule: the admin, or the
+/// organiser of the competitions it takes part in), shown once.
+async fn new_entrant_key(state: &AppState, visitor: &Visitor, id: i64, back: &str) -> PageResult {
+    let e = state
+        .storage
+        .get_entrant(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no entrant {id}")))?;
+    let new = super::super::entrants::rotate(state, &visitor.caller, id).await?;
+    handed_over(crate::web::pages::account::handed_over(
+        &format!("entrant {}", e.name),
+        &e.name,
+        &new.key,
+        back,
+    ))
+}
+
+/// The admin's "new key" for any entrant.
+async fn admin_entrant_key(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath(id): AppPath<i64>,
+    request: Request,
+) -> PageResult {
+    let form: TokenOnly = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    visitor.caller.require_admin()?;
+    new_entrant_key(&state, &visitor, id, "/admin#entrants").await
+}
+
+/// The admin's "new key" for an organiser.
+async fn admin_organiser_key(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppPath(id): AppPath<i64>,
+    request: Request,
+) -> PageResult {
+    let form: TokenOnly = read_form(&state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    let name = state
+        .storage
+        .organiser_name(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no organiser {id}")))?;
+    let new = super::super::invites::new_organiser_key(&state, &visitor.caller, id).await?;
+    handed_over(crate::web::pages::account::handed_over(
+        &format!("organiser {name}"),
+        &name,
+        &new.key,
+        "/admin",
+    ))
+}
+
+/// Sends the browser back to the manage page saying what was done (`done`, a query
+/// of [`DoneQuery`]), or answers the page again with `result`'s error.
 async fn manage_after(
     state: &AppState,
     visitor: &Visitor,
@@ -314,10 +584,10 @@ async fn manage_after(
     result: Result<String, PageError>,
 ) -> PageResult {
     match result {
-        Ok(notice) => {
-            let p = manage_data(state, visitor, name, Some(notice)).await?;
-            Ok(Html(web::manage(&p)).into_response())
-        }
+        Ok(done) => Ok(see_other(
+            &format!("/competitions/{name}/manage?done={done}"),
+            None,
+        )),
         Err(e) => {
             let p = manage_data(state, visitor, name, Some(e.message().to_string())).await?;
             Err(e.with_page(|_| web::manage(&p)))
@@ -340,6 +610,8 @@ struct EditForm {
     versions_per_day: String,
     #[serde(default)]
     practice_per_day: String,
+    #[serde(default)]
+    validation: String,
 }
 
 fn parse_field<T: std::str::FromStr>(name: &str, value: &str) -> Result<Option<T>, PageError> {
@@ -386,10 +658,21 @@ async fn edit(
             },
             versions_per_day: parse_field("versions_per_day", &form.versions_per_day)?,
             practice_per_day: parse_field("practice_per_day", &form.practice_per_day)?,
+            validation: match form.validation.trim() {
+                "" => None,
+                v if v == c.validation => None,
+                v @ ("start" | "match" | "off") => Some(crate::competition::Validation::parse(v)),
+                other => {
+                    return Err(PageError::new(
+                        StatusCode::UNPROCESSABLE_ENTITY,
+                        format!("validation: {other:?} is not start, match or off"),
+                    ));
+                }
+            },
             ..Patch::default()
         };
         super::super::competitions::edit(&state, &visitor.caller, &name, patch).await?;
-        Ok::<_, PageError>("Saved.".to_string())
+        Ok::<_, PageError>("saved".to_string())
     }
     .await;
     manage_after(&state, &visitor, &name, result).await
@@ -422,7 +705,7 @@ async fn close(
             ..Patch::default()
         };
         super::super::competitions::edit(&state, &visitor.caller, &name, patch).await?;
-        Ok("Closed: the final selection and the final run follow.".to_string())
+        Ok("closed".to_string())
     }
     .await;
     manage_after(&state, &visitor, &name, result).await
@@ -452,12 +735,7 @@ async fn rejudge(
     };
     let result = super::super::competitions::rejudge(&state, &visitor.caller, &name, &request)
         .await
-        .map(|r| {
-            format!(
-                "Rejudge {}: {} matches queued again; their earlier records are kept.",
-                r.rejudge_id, r.matches
-            )
-        })
+        .map(|r| format!("rejudged&rejudge={}", r.rejudge_id))
         .map_err(PageError::from);
     manage_after(&state, &visitor, &name, result).await
 }
@@ -473,28 +751,86 @@ async fn export(
     Ok(super::super::competitions::export_archive(&state, &visitor.caller, &name).await?)
 }
 
+/// How many entrants the admin page lists.
+const ADMIN_ENTRANTS: i64 = 100;
+
 async fn admin_data(
     state: &AppState,
     visitor: &Visitor,
     notice: Option<String>,
     new_key: Option<(String, String)>,
 ) -> PageResult<web::AdminPage> {
+    admin_data_found(state, visitor, notice, new_key, "").await
+}
+
+async fn admin_data_found(
+    state: &AppState,
+    visitor: &Visitor,
+    notice: Option<String>,
+    new_key: Option<(String, String)>,
+    search: &str,
+) -> PageResult<web::AdminPage> {
     visitor.caller.require_admin()?;
     let mode = state.storage.registration().await?;
+    let found =
+        super::super::invites::find_entrants(state, &visitor.caller, search, ADMIN_ENTRANTS)
+            .await?;
     Ok(web::AdminPage {
         mode: super::super::entrants::registration_name(&mode).into(),
         organisers: state.storage.list_organisers().await?,
         csrf: csrf(visitor),
         notice,
         new_key,
+        search: search.to_string(),
+        entrants: found.items,
+        entrants_total: found.total,
     })
 }
 
-async fn admin_page(State(state): State<AppState>, visitor: Visitor) -> PageResult {
+/// The admin page's query: what the last form did.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AdminQuery {
+    /// `registration`: the registration mode was set.
+    done: Option<AdminDone>,
+    /// The entrants' search.
+    search: Option<String>,
+}
+
+/// What a form of the admin page did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum AdminDone {
+    /// The registration mode was set.
+    Registration,
+}
+
+async fn admin_page(
+    State(state): State<AppState>,
+    visitor: Visitor,
+    AppQuery(q): AppQuery<AdminQuery>,
+) -> PageResult {
     if let Some(r) = login_first(&visitor, "/admin") {
         return Ok(r);
     }
-    let p = admin_data(&state, &visitor, None, None).await?;
+    let notice = match q.done {
+        Some(AdminDone::Registration) => {
+            let mode = state.storage.registration().await?;
+            Some(format!(
+                "Registration is now {}.",
+                super::super::entrants::registration_name(&mode)
+            ))
+        }
+        None => None,
+    };
+    let p = admin_data_found(
+        &state,
+        &visitor,
+        notice,
+        None,
+        q.search.as_deref().unwrap_or("").trim(),
+    )
+    .await?;
     Ok(Html(web::admin(&p)).into_response())
 }
 
@@ -518,16 +854,7 @@ async fn set_registration(
         invite_code: form.invite_code.filter(|c| !c.trim().is_empty()),
     };
     match super::super::entrants::set_mode(&state, &visitor.caller, body).await {
-        Ok(m) => {
-            let p = admin_data(
-                &state,
-                &visitor,
-                Some(format!("Registration is now {}.", m.mode)),
-                None,
-            )
-            .await?;
-            Ok(Html(web::admin(&p)).into_response())
-        }
+        Ok(_) => Ok(see_other("/admin?done=registration", None)),
         Err(e) => {
             let e = PageError::from(e);
             let p = admin_data(&state, &visitor, Some(e.message().to_string()), None).await?;

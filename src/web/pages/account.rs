@@ -3,9 +3,9 @@
 //! the submission form. Plain forms that work without JavaScript; every form that
 //! changes something carries the session's anti-forgery token.
 
-use maud::{Markup, html};
+use maud::{Markup, PreEscaped, html};
 
-use super::super::layout::{page, status, time};
+use super::super::layout::{NAME_PATTERN, page, status, time};
 use super::lists::{MatchLine, match_table};
 use super::ranks;
 use crate::competition::Quota;
@@ -54,10 +54,16 @@ pub fn login(error: Option<&str>, next: &str) -> String {
 }
 
 /// What the registration page knows of the server.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct RegisterPage {
     /// `open`, `invite` or `closed`.
     pub mode: String,
+    /// The invite code the visitor's link carried (filled in).
+    pub invite: Option<String>,
+    /// The competition whose code it is: its title (none: not a competition's code).
+    pub competition: Option<String>,
+    /// Why the carried code does not register (a wrong code; its competition closed).
+    pub invite_error: Option<String>,
 }
 
 /// The registration form.
@@ -66,18 +72,22 @@ pub fn register(p: &RegisterPage, error: Option<&str>, name: &str, members: &str
         "Register",
         html! {
             h1 { "Register" }
+            @if let Some(title) = &p.competition {
+                p.lead.competition { "You are registering for " strong { (title) } ": with its invite code, filled in below." }
+            }
+            @if let Some(e) = &p.invite_error { p.error role="alert" { (e) } }
             @match p.mode.as_str() {
-                "closed" => {
+                "closed" if p.competition.is_none() => {
                     p.lead { "Registration is closed on this server: the admin registers entrants. Ask your organiser for your key, then " a href="/login" { "log in" } "." }
                 }
                 _ => {
                     p.lead { "Register yourself or your team as an entrant. You get a key: it signs you in here and acts for your bots from the command line or the API." }
                     (notice(error))
                     form.stacked method="post" action="/register" {
-                        label { "Name (letters, digits, - _ .) " input type="text" name="name" value=(name) required maxlength="64" pattern="[A-Za-z0-9._-]+"; }
+                        label { "Name (letters, digits, - _ .) " input type="text" name="name" value=(name) required maxlength="64" pattern=(NAME_PATTERN); }
                         label { "Members (one per line, optional) " textarea name="members" rows="3" { (members) } }
-                        @if p.mode == "invite" {
-                            label { "Invite code " input type="text" name="invite_code" required autocomplete="off"; }
+                        @if p.mode == "invite" || p.invite.is_some() {
+                            label { "Invite code " input type="text" name="invite_code" value=(p.invite.as_deref().unwrap_or("")) required[p.mode == "invite" && p.competition.is_none()] autocomplete="off"; }
                         }
                         button type="submit" { "Register" }
                     }
@@ -87,25 +97,48 @@ pub fn register(p: &RegisterPage, error: Option<&str>, name: &str, members: &str
     )
 }
 
-/// The page after a registration: the key, shown once.
-pub fn registered(name: &str, key: &str) -> String {
-    key_page("Registered", &format!("Welcome, {name}"), name, key)
+/// The page after a registration: the key, shown once; with the competition whose
+/// invite code registered it (its short name), the way to its submit form.
+pub fn registered(name: &str, key: &str, competition: Option<&str>) -> String {
+    let next = html! {
+        @match competition {
+            Some(c) => p.next { "You are signed in. Next: " a.button href={ "/competitions/" (c) "/submit" } { "upload your robot to " (c) } " or go to " a href="/me" { "your page" } "." },
+            None => p.next { "You are signed in. Next: " a href="/competitions" { "choose a competition" } " and upload your bot, or go to " a href="/me" { "your page" } "." },
+        }
+    };
+    key_page("Registered", &format!("Welcome, {name}"), name, key, next)
 }
 
 /// The page after a key was replaced: the new key, shown once.
 pub fn replaced(name: &str, key: &str) -> String {
-    key_page("New key", "Your new key", name, key)
+    let next = html! { p { "You are signed in with it. Go to " a href="/me" { "your page" } "." } };
+    key_page("New key", "Your new key", name, key, next)
 }
 
-fn key_page(title: &str, heading: &str, name: &str, key: &str) -> String {
+/// The page after the admin or an organiser gave `whom` (an entrant or an organiser,
+/// in words) a new key: shown once, to be handed over; `back` is the page to go on to.
+pub fn handed_over(whom: &str, file_name: &str, key: &str, back: &str) -> String {
+    page(
+        "New key",
+        html! {
+            h1 { "A new key for " (whom) }
+            p.warning { strong { "Give this key to " (whom) " now: it is shown only this once." } " The old key, and every session opened with it, no longer work." }
+            pre.key id="new-key" { (key) }
+            p { a.button download={ "mazearena-key-" (file_name) ".txt" } href={ "data:text/plain;charset=utf-8," (key) } { "Download the key as a file" } }
+            p { a href=(back) { "Back" } }
+        },
+    )
+}
+
+fn key_page(title: &str, heading: &str, name: &str, key: &str, next: Markup) -> String {
     page(
         title,
         html! {
             h1 { (heading) }
-            p.warning { strong { "Save your key now: it is shown only this once." } " It signs you in on any browser and acts for your bots from the command line (" code { "mazearena login" } ") or the API (" code { "Authorization: Bearer KEY" } "). If you lose it, the admin can give you a new one." }
+            p.warning { strong { "Save your key now: it is shown only this once." } " It signs you in on any browser and acts for your bots from the command line (" code { "mazearena login" } ") or the API (" code { "Authorization: Bearer KEY" } "). If you lose it, your competition's organiser or the admin can give you a new one." }
             pre.key id="new-key" { (key) }
             p { a.button download={ "mazearena-key-" (name) ".txt" } href={ "data:text/plain;charset=utf-8," (key) } { "Download the key as a file" } }
-            p { "You are signed in. Next: " a href="/competitions" { "choose a competition" } " and upload your bot, or go to " a href="/me" { "your page" } "." }
+            (next)
         },
     )
 }
@@ -195,6 +228,42 @@ pub struct MePage {
     pub live: bool,
     /// What the visitor has used of the server's quotas on uploads, in words.
     pub uploads_quota: Option<String>,
+    /// Why the last "replace my key" was refused.
+    pub key_error: Option<String>,
+}
+
+/// The submit form's script: offers the uploaded `.py` files as the robot's file.
+pub const SUBMIT_FORM_JS: &str = include_str!("../assets/submit_form.js");
+
+/// How many of a runtime's packages the submit form's list names (with versions).
+const RUNTIME_PACKAGES_SHOWN: usize = 12;
+
+/// What runtime `r` is, in the submit form's list: its programs and packages with their
+/// versions (as the home page says them), so that two runtimes that differ only in a
+/// package's version do not look the same.
+pub fn runtime_words(r: &crate::runner::runtimes::RuntimeInfo) -> String {
+    let programs: Vec<String> = r
+        .programs
+        .iter()
+        .map(|p| format!("{} {}", p.program, p.version))
+        .collect();
+    let packages: Vec<String> = r
+        .packages
+        .iter()
+        .take(RUNTIME_PACKAGES_SHOWN)
+        .map(|p| format!("{} {}", p.name, p.version))
+        .collect();
+    let mut what = programs.join(", ");
+    if !packages.is_empty() {
+        what.push_str(&format!(" with {}", packages.join(", ")));
+    }
+    if r.packages.len() > RUNTIME_PACKAGES_SHOWN {
+        what.push_str(&format!(
+            " and {} more",
+            r.packages.len() - RUNTIME_PACKAGES_SHOWN
+        ));
+    }
+    what
 }
 
 /// The "me" page.
@@ -207,11 +276,13 @@ pub fn me(p: &MePage) -> String {
             button type="submit" { "Log out" }
         }
         @if p.kind == "entrant" {
-            details.rotate {
+            details.rotate open[p.key_error.is_some()] {
                 summary { "Replace my key" }
                 p.muted { "If your key was seen by someone else: a new key replaces it at once. The old key, your bots' owner tokens and every session opened with them stop working (log in again on your other browsers and with " code { "mazearena login" } ")." }
+                @if let Some(e) = &p.key_error { p.error role="alert" { (e) } }
                 form.inline.rotate method="post" action="/me/key" {
                     (csrf_field(&p.csrf))
+                    label { "Your current key " input type="password" name="current_key" required autocomplete="current-password"; }
                     button.danger type="submit" { "Replace my key now" }
                 }
             }
@@ -286,8 +357,9 @@ pub fn me(p: &MePage) -> String {
                 section.my-bot {
                     h3 { a href={ "/bots/" (b.bot_id) } { (b.name) } " " span.muted { "(bot " (b.bot_id) ")" } }
                     @for (i, v) in b.versions.iter().enumerate() {
-                        details.version open[i == 0 || v.build_status != "ready"] {
-                            summary { "version " (v.version) " " (status(&v.build_status)) " " span.muted { (time(v.created_at)) " · " code { (v.command) } } }
+                        @let warned = v.build_status == "ready" && v.log.as_deref().is_some_and(|l| l.contains("warning: "));
+                        details.version open[i == 0 || v.build_status != "ready" || warned] {
+                            summary { "version " (v.version) " " (status(&v.build_status)) @if warned { " " span.warned { "with a warning" } } " " span.muted { (time(v.created_at)) " · " code { (v.command) } } }
                             @match &v.log {
                                 Some(log) => { pre.log.build-log { (log) } }
                                 None => { p.muted { "No build or validation output yet." } }
@@ -351,7 +423,7 @@ pub fn submit(p: &SubmitPage) -> String {
             form.stacked.submit method="post" enctype="multipart/form-data" action={ "/competitions/" (p.competition) "/submit" } {
                 (csrf_field(&p.csrf))
                 @if p.bot.is_none() {
-                    label { "Bot name (letters, digits, - _ .) " input type="text" name="name" required maxlength="64" pattern="[A-Za-z0-9._-]+"; }
+                    label { "Bot name (letters, digits, - _ .) " input type="text" name="name" required maxlength="64" pattern=(NAME_PATTERN); }
                 }
                 fieldset {
                     legend { "Your files" }
@@ -361,8 +433,11 @@ pub fn submit(p: &SubmitPage) -> String {
                 }
                 fieldset {
                     legend { "How it runs" }
-                    label.check { input type="checkbox" name="original_task" value="true"; " A " code { "robot.py" } " of the original task (class Robot with next_move): the server adds the adapter, so upload only your own files" }
-                    label { "Command (leave empty for a robot.py of the original task) " input type="text" name="command" placeholder="python3 bot.py"; }
+                    label.check { input type="checkbox" name="original_task" value="true"; " A robot of the original task (" code { "class Robot" } " with " code { "next_move" } "): the server adds the adapter, so upload only your own files" }
+                    label { "The file that holds class Robot (original task) " select #robot-file name="robot_file" {
+                        option value="" { "robot.py, or else the only .py file that defines class Robot" }
+                    } }
+                    label { "Command (leave empty for a robot of the original task) " input type="text" name="command" placeholder="python3 bot.py"; }
                     label { "Build command (optional, run once without network) " input type="text" name="build" placeholder="make"; }
                     label { "Protocol " select name="protocol" {
                         option value="v1" { "v1: JSON lines (the kits, an original-task robot.py)" }
@@ -376,6 +451,56 @@ pub fn submit(p: &SubmitPage) -> String {
                 button type="submit" { "Upload" }
             }
             p.muted { "After the upload the server builds your version (if it has a build command) and plays a short validation match; " a href="/me" { "your page" } " shows both as they happen." }
+            script { (PreEscaped(SUBMIT_FORM_JS)) }
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::runtime_words;
+    use crate::runner::runtimes::{Package, ProgramInfo, RuntimeInfo};
+
+    fn runtime(name: &str, numpy: &str, pandas: &str) -> RuntimeInfo {
+        RuntimeInfo {
+            name: name.into(),
+            kind: "operator".into(),
+            languages: vec!["Python".into()],
+            programs: vec![ProgramInfo {
+                program: "python3".into(),
+                version: "Python 3.11.2".into(),
+            }],
+            packages: vec![
+                Package {
+                    name: "numpy".into(),
+                    version: numpy.into(),
+                },
+                Package {
+                    name: "pandas".into(),
+                    version: pandas.into(),
+                },
+            ],
+        }
+    }
+
+    #[test]
+    fn two_runtimes_that_differ_in_a_packages_version_are_told_apart() {
+        let old = runtime_words(&runtime("np1", "1.26.4", "1.5.3"));
+        let new = runtime_words(&runtime("np2", "2.1.0", "2.2.3"));
+        assert_eq!(old, "python3 Python 3.11.2 with numpy 1.26.4, pandas 1.5.3");
+        assert_ne!(old, new);
+        let mut many = runtime("many", "1", "1");
+        many.packages = (0..20)
+            .map(|i| Package {
+                name: format!("p{i:02}"),
+                version: format!("0.{i}"),
+            })
+            .collect();
+        let words = runtime_words(&many);
+        assert!(
+            words.contains("p11 0.11") && !words.contains("p12"),
+            "{words}"
+        );
+        assert!(words.ends_with(" and 8 more"), "{words}");
+    }
 }

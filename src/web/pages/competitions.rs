@@ -53,6 +53,8 @@ pub struct CompetitionPage {
     pub private: Option<Board>,
     /// The final results, once written.
     pub results: Option<Vec<ResultRow>>,
+    /// The invite code the visitor's link carried, passed on to the registration.
+    pub invite: Option<String>,
 }
 
 /// The list of competitions.
@@ -139,9 +141,14 @@ pub fn competition(p: &CompetitionPage) -> String {
             section.take-part #take-part {
                 h2 { "How to take part" }
                 ol {
-                    li { strong { "In the browser: " } a href="/register" { "register" } " (or " a href="/login" { "log in" } " with your key), then "
+                    li { strong { "In the browser: " }
+                        @match &p.invite {
+                            Some(code) => { a.button.register href={ "/register?invite=" (code) } { "register with your class's invite code" } }
+                            None => { a.register href="/register" { "register" } }
+                        }
+                        " (or " a href="/login" { "log in" } " with your key), then "
                         a.button href={ "/competitions/" (c.name) "/submit" } { "upload your bot" }
-                        ". Upload your files or a .zip; for a " code { "robot.py" } " of the original task tick \"robot.py of the original task\" and upload only your own files. "
+                        ". Upload your files or a .zip; for a robot of the original task tick \"A robot of the original task\" and upload only your own files (the form finds the file that defines " code { "class Robot" } "). "
                         a href="/me" { "Your page" } " shows the build, the validation match, your practice matches with your stderr, your rank and your quotas." }
                     li { strong { "From a terminal: " } code { "mazearena login URL --key KEY" } ", then " code { "mazearena submit ./my-bot --competition " (c.name) } " (see the README's \"Take part\")." }
                     li { strong { "With curl: " } code { "POST /api/entrants" } ", " code { "POST /api/bots" } " with your key, then " code { "POST /api/competitions/" (c.name) "/entries" } " (the " a href="/api/openapi.json" { "API document" } ")." }
@@ -192,9 +199,14 @@ pub fn competition(p: &CompetitionPage) -> String {
         @if let Some(private) = &p.private {
             h2 { "Private leaderboard" }
             @if private.sealed {
-                @match private.final_run {
-                    Some(run) => p.muted.sealed #final-run { "The final run is playing: " (run.played) " of " (run.total) " matches played. The private board comes with the results." },
-                    None => p.muted.sealed { "No bot plays a private maze before the close: the private set's only run is the final run, after the close." },
+                @if private.final_run_playing {
+                    p.muted.sealed #final-run {
+                        "The final run is playing"
+                        @if let Some(run) = private.final_run { ": " (run.played) " of " (run.total) " matches played" }
+                        ". The private board comes with the results."
+                    }
+                } @else {
+                    p.muted.sealed { "No bot plays a private maze before the close: the private set's only run is the final run, after the close." }
                 }
             } @else { (board_table(&private.standings)) }
         }

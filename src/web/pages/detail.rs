@@ -128,6 +128,9 @@ pub struct MatchPage<'a> {
     pub pruned: bool,
     /// True when the visitor's session owns the bot: its stderr is in the viewer.
     pub owner: bool,
+    /// The end of the bot's stderr, for its owner (any status; none on a hidden maze or
+    /// for anyone else).
+    pub stderr_tail: Option<String>,
     /// Earlier outcomes that rejudges superseded: status, score, when it had ended.
     pub superseded: Vec<crate::storage::rejudges::SupersededRow>,
 }
@@ -147,7 +150,15 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
                 div.card { "tournament" b { a href={ "/tournaments/" (t) } { (t) } } }
             }
         }
-        @if let Some(reason) = &p.line.reason { p { strong { "Reason: " } (reason) } }
+        @if let Some(reason) = &p.line.reason { p.reason { strong { "Reason: " } (reason) } }
+        @if let Some(tail) = &p.stderr_tail {
+            h2 { "The end of its stderr" }
+            @if tail.is_empty() {
+                p.muted.stderr-tail { "Its bot wrote nothing on stderr." }
+            } @else {
+                pre.stderr-tail tabindex="0" { (tail) }
+            }
+        }
         p {
             a href={ "/bots/" (r.bot_id) } { "bot " (p.line.row.bot_name) } " · "
             a href={ "/mazes/" (r.maze_id) } { "maze " (p.line.row.maze_name) } " · "
@@ -174,6 +185,8 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
                     p.muted { "Played on a hidden ranking maze: its replay is not shown." }
                 } @else if p.pruned {
                     p.muted { "Its replay was removed to save space (an old practice match); its result stays." }
+                } @else if !matches!(r.status.as_str(), "queued" | "running") {
+                    p.muted { "No replay: the match ended before its bot's first move." }
                 } @else {
                     p.muted { "Not played yet: this page reloads every 5 seconds until it is." }
                 }

@@ -49,6 +49,8 @@ pub fn organise(csrf: &str, mine: &[OrganisedLine], error: Option<&str>) -> Stri
 /// One entrant on the manage page.
 #[derive(Debug, Clone)]
 pub struct EntrantLine {
+    /// Its id.
+    pub entrant_id: i64,
     /// Entrant.
     pub entrant: String,
     /// Bot id and name.
@@ -84,6 +86,12 @@ pub struct ManagePage {
     pub practice_per_day: i64,
     /// The entrants.
     pub entrants: Vec<EntrantLine>,
+    /// Entrants registered with its invite code that have no bot in it yet: id, name.
+    pub registered: Vec<(i64, String)>,
+    /// Its own invite code and the link that carries it (a path), if it has one.
+    pub invite: Option<(String, String)>,
+    /// How new versions are checked: `start`, `match` or `off`.
+    pub validation: String,
     /// Matches and builds still to do for it.
     pub work_left: i64,
     /// The final run: played of total.
@@ -96,6 +104,20 @@ pub struct ManagePage {
     pub csrf: String,
     /// A notice or an error of the last action.
     pub notice: Option<String>,
+}
+
+/// A "new key" button for `whom` (inside a disclosure, so that one click does not end
+/// someone's sessions), posting to `action`.
+fn new_key_form(action: &str, csrf: &str, whom: &str) -> Markup {
+    html! {
+        details.new-key {
+            summary { "New key…" }
+            form.inline method="post" action=(action) {
+                (csrf_field(csrf))
+                button.danger type="submit" { "Replace the key of " (whom) " now" }
+            }
+        }
+    }
 }
 
 /// The manage page of a competition.
@@ -119,17 +141,50 @@ pub fn manage(p: &ManagePage) -> String {
             } @else { li.muted { "results.csv comes with the results, after the close and the final run" } }
             li { a.export href={ "/competitions/" (p.name) "/export.tar.gz" } { "the competition as a folder (.tar.gz)" } ": its file and every maze, private ones included" }
         }
+        h2 { "Invite code" }
+        @if !p.closed {
+            @match &p.invite {
+                Some((code, link)) => {
+                    p { "Its code: " code.invite-code { (code) } ". Give the class this link: it opens the competition's page, whose \"How to take part\" registers with the code filled in and then leads to the upload." }
+                    p { a.invite-link href=(link) { (link) } " (on this server)" }
+                }
+                None => p.muted { "None: students register as the server allows (" a href="/register" { "its registration" } "). A code of the competition's own registers them whatever the server's mode and leads them here." },
+            }
+            form.inline.invite-set method="post" action=(action("invite")) {
+                (csrf_field(&p.csrf))
+                input type="hidden" name="action" value="set";
+                label { "Code (8 to 64 letters, digits, - _ .; empty: a random one) " input type="text" name="invite_code" maxlength="64" pattern=(crate::web::layout::NAME_PATTERN) autocomplete="off"; }
+                button type="submit" { @if p.invite.is_some() { "Replace the code" } @else { "Set a code" } }
+            }
+            @if p.invite.is_some() {
+                form.inline.invite-remove method="post" action=(action("invite")) {
+                    (csrf_field(&p.csrf))
+                    input type="hidden" name="action" value="remove";
+                    button type="submit" { "Remove the code" }
+                }
+            }
+        } @else { p.muted { "Closed: its invite code registers no one now." } }
         h2 { "Entrants" }
         @if p.entrants.is_empty() { p.muted { "No entrant yet." } } @else {
             table.data.entrants {
-                thead { tr { th { "entrant" } th { "bot" } th { "versions" } th { "quotas" } } }
+                thead { tr { th { "entrant" } th { "bot" } th { "versions" } th { "quotas" } th { "key" } } }
                 tbody { @for e in &p.entrants {
                     tr {
                         td { (e.entrant) }
                         td { a href={ "/bots/" (e.bot.0) } { (e.bot.1) } }
                         td { @for (id, n, s) in &e.versions { span.version title={ "version id " (id) } { "v" (n) " " (status(s)) " " } } }
                         td.muted { (e.quotas) }
+                        td { (new_key_form(&action(&format!("entrants/{}/key", e.entrant_id)), &p.csrf, &e.entrant)) }
                     }
+                } }
+            }
+        }
+        @if !p.registered.is_empty() {
+            h3 { "Registered with the invite code, no bot yet" }
+            table.data.registered {
+                thead { tr { th { "entrant" } th { "key" } } }
+                tbody { @for (id, name) in &p.registered {
+                    tr { td { (name) } td { (new_key_form(&action(&format!("entrants/{id}/key")), &p.csrf, name)) } }
                 } }
             }
         }
@@ -142,7 +197,33 @@ pub fn manage(p: &ManagePage) -> String {
                 label { "Freeze the public board this many hours before the close (empty: no freeze) " input type="text" name="freeze_hours" value=(p.freeze_hours); }
                 label { "Versions per entrant per 24 hours " input type="number" min="1" name="versions_per_day" value=(p.versions_per_day); }
                 label { "Practice matches per entrant per 24 hours " input type="number" min="0" name="practice_per_day" value=(p.practice_per_day); }
+                label { "Validation of each new version " select name="validation" {
+                    option value="start" selected[p.validation == "start"] { "start: invalid only if it fails before its first move on every maze tried (it does not start); a failure on one maze is a warning" }
+                    option value="match" selected[p.validation == "match"] { "match: invalid for any failure in its validation match on the first practice maze" }
+                    option value="off" selected[p.validation == "off"] { "off: no validation match" }
+                } }
                 button type="submit" { "Save" }
+            }
+            h2 { "Practice mazes" }
+            p.muted { "The mazes entrants practise on (public), and on which each new version plays its validation match, in this order." }
+            @let practice: Vec<&(i64, String, String)> = p.mazes.iter().filter(|(_, set, _)| set == "practice").collect();
+            @if practice.is_empty() { p.muted { "None: validation matches play a generated maze." } } @else {
+                table.data.practice {
+                    thead { tr { th { "maze" } th { "remove" } } }
+                    tbody { @for (id, _, name) in &practice { tr {
+                        td { a href={ "/mazes/" (id) } { (name) } }
+                        td { form.inline.practice-remove method="post" action=(action("practice")) {
+                            (csrf_field(&p.csrf))
+                            input type="hidden" name="remove" value=(id);
+                            button type="submit" { "Remove " (name) }
+                        } }
+                    } } }
+                }
+            }
+            form.stacked.practice-add method="post" enctype="multipart/form-data" action=(action("practice")) {
+                (csrf_field(&p.csrf))
+                label { "Add a maze file (numeric or ASCII; its file name names it) " input type="file" name="maze" required; }
+                button type="submit" { "Add the practice maze" }
             }
             h2 { "Close now" }
             form.stacked.close method="post" action=(action("close")) {
@@ -201,6 +282,12 @@ pub struct AdminPage {
     pub notice: Option<String>,
     /// A new organiser's name and key, shown once.
     pub new_key: Option<(String, String)>,
+    /// The entrants' search: the text searched for.
+    pub search: String,
+    /// The entrants found: id, name, members, registered at, key replaced at.
+    pub entrants: Vec<crate::registry::entrants::EntrantLine>,
+    /// How many entrants match the search in all.
+    pub entrants_total: i64,
 }
 
 fn mode_option(current: &str, value: &str, label: &str) -> Markup {
@@ -233,14 +320,36 @@ pub fn admin(p: &AdminPage) -> String {
             h2 { "Organisers" }
             @if p.organisers.is_empty() { p.muted { "None yet." } } @else {
                 table.data.organisers {
-                    thead { tr { th.num { "id" } th { "name" } th { "since" } } }
-                    tbody { @for (id, name, at) in &p.organisers { tr { td.num { (id) } td { (name) } td { (time(*at)) } } } }
+                    thead { tr { th.num { "id" } th { "name" } th { "since" } th { "key" } } }
+                    tbody { @for (id, name, at) in &p.organisers { tr {
+                        td.num { (id) } td { (name) } td { (time(*at)) }
+                        td { (new_key_form(&format!("/admin/organisers/{id}/key"), &p.csrf, &format!("organiser {name}"))) }
+                    } } }
                 }
             }
             form.inline.organiser method="post" action="/admin/organisers" {
                 (csrf_field(&p.csrf))
-                input type="text" name="name" placeholder="organiser's name" required maxlength="64";
+                label { "Name " input type="text" name="name" placeholder="organiser's name" required maxlength="64"; }
                 button type="submit" { "Add an organiser" }
+            }
+            h2 #entrants { "Entrants" }
+            form.inline.search method="get" action="/admin#entrants" role="search" {
+                label { "Name or member " input type="search" name="search" value=(p.search) maxlength="100"; }
+                button type="submit" { "Search" }
+            }
+            p.muted.found { (p.entrants_total) " entrants"
+                @if !p.search.is_empty() { " match " q { (p.search) } }
+                @if (p.entrants.len() as i64) < p.entrants_total { "; the first " (p.entrants.len()) " by name are shown" }
+                "." }
+            @if !p.entrants.is_empty() {
+                table.data.entrants {
+                    thead { tr { th.num { "id" } th { "name" } th { "members" } th { "since" } th { "key replaced" } th { "key" } } }
+                    tbody { @for e in &p.entrants { tr {
+                        td.num { (e.entrant_id) } td.name { (e.name) } td { (e.members.join(", ")) } td { (time(e.created_at)) }
+                        td { (e.key_rotated_at.map(time).unwrap_or_default()) }
+                        td { (new_key_form(&format!("/admin/entrants/{}/key", e.entrant_id), &p.csrf, &format!("entrant {}", e.name))) }
+                    } } }
+                }
             }
         },
     )
