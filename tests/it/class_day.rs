@@ -13,7 +13,7 @@ use super::sessions::Web;
 use super::support::{ADMIN, TestServer, mazearena, register, root, simple_bot_files};
 
 /// Registers entrant `name` through the API: its key.
-async fn entrant(server: &TestServer, name: &str) -> String {
+pub(crate) async fn entrant(server: &TestServer, name: &str) -> String {
     let (s, e) = server
         .post("/api/entrants", json!({"name": name}), None)
         .await;
@@ -350,7 +350,7 @@ async fn the_browser_checks_name_fields_and_a_cookie_from_another_port_signs_out
 
 /// A competition open now on two generated public mazes, made by a new organiser: the
 /// organiser's key.
-async fn open_competition(server: &TestServer, name: &str) -> String {
+pub(crate) async fn open_competition(server: &TestServer, name: &str) -> String {
     let (_, o) = server
         .post(
             "/api/organisers",
@@ -385,7 +385,7 @@ async fn open_competition(server: &TestServer, name: &str) -> String {
 
 /// Logs the browser in with `key` (as a new visitor: no cookie of an earlier one) and
 /// waits for the redirect to /me.
-async fn browser_login(b: &Browser, base: &str, key: &str) {
+pub(crate) async fn browser_login(b: &Browser, base: &str, key: &str) {
     b.client.goto(&format!("{base}/favicon.svg")).await.unwrap();
     b.client.delete_all_cookies().await.unwrap();
     b.open(&format!("{base}/login"), "input[name=key]").await;
@@ -405,7 +405,7 @@ async fn browser_login(b: &Browser, base: &str, key: &str) {
 }
 
 /// Waits (at most `secs`) until competition `name`'s public board ranks `bot`.
-async fn wait_ranked(server: &TestServer, name: &str, bot: &str, secs: u64) -> Value {
+pub(crate) async fn wait_ranked(server: &TestServer, name: &str, bot: &str, secs: u64) -> Value {
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
     loop {
         let (_, board) = server

@@ -1,5 +1,6 @@
 //! The one integration-test binary (one link step for CI): real files, real processes.
 
+mod access;
 mod api;
 mod authors;
 mod bots;

@@ -313,12 +313,12 @@ pub fn me(p: &MePage) -> String {
                     Some(bot) => {
                         @if c.taking_part { p { a.button href={ "/competitions/" (c.name) "/submit" } { "Upload a new version" } } }
                         table.data.submissions {
-                            thead { tr { th.num { "version" } th { "build" } th { "status" } th.num { "public rank" } th.num { "mean" } (ranks::header_cells()) th.num { "finished" } } }
+                            thead { tr { th.num { "version" } th.wide { "build" } th { "status" } th.num { "public rank" } th.num { "mean" } (ranks::header_cells()) th.num.wide { "finished" } } }
                             tbody {
                                 @for v in &c.versions {
                                     tr {
                                         td.num { (v.version) }
-                                        td { (status(&v.build_status)) }
+                                        td.wide { (status(&v.build_status)) }
                                         td { (v.status) }
                                         @match &v.public {
                                             Some(l) => {
@@ -326,9 +326,9 @@ pub fn me(p: &MePage) -> String {
                                                 td.num { (format!("{:.3}", l.mean_score)) }
                                                 (ranks::interval_cell(&l.uncertainty))
                                                 (ranks::tie_cell(&l.uncertainty))
-                                                td.num { (l.finished) "/" (l.played) }
+                                                td.num.wide { (l.finished) "/" (l.played) }
                                             }
-                                            None => { td.num { "-" } td.num { "-" } td.num { "-" } td {} td.num { "-" } }
+                                            None => { td.num { "-" } td.num { "-" } td.num.wide { "-" } td.wide {} td.num.wide { "-" } }
                                         }
                                     }
                                 }

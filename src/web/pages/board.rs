@@ -135,11 +135,11 @@ pub(super) fn standings_table(s: &StandingsSection) -> Markup {
                     th { (link(SortKey::Name, "bot")) }
                     th.num { (link(SortKey::Rank, "mean score")) }
                     (ranks::header_cells())
-                    th.num { (link(SortKey::FinishRate, "finish rate")) }
-                    th.num title="mean of score / the maze's optimal run-1 steps (1.0 is perfect)" {
+                    th.num.wide { (link(SortKey::FinishRate, "finish rate")) }
+                    th.num.wide title="mean of score / the maze's optimal run-1 steps (1.0 is perfect)" {
                         (link(SortKey::Efficiency, "score / optimum"))
                     }
-                    th.num { (link(SortKey::Played, "played")) }
+                    th.num.wide { (link(SortKey::Played, "played")) }
                 } }
                 tbody {
                     @for r in &s.rows {
@@ -149,9 +149,9 @@ pub(super) fn standings_table(s: &StandingsSection) -> Markup {
                             td.num { (format!("{:.3}", r.mean_score)) }
                             (ranks::interval_cell(&r.uncertainty))
                             (ranks::tie_cell(&r.uncertainty))
-                            td.num { (format!("{:.0}%", r.finish_rate * 100.0)) }
-                            td.num { @match r.mean_ratio { Some(x) => (format!("{x:.3}")), None => span.muted { "-" } } }
-                            td.num { (r.played) }
+                            td.num.wide { (format!("{:.0}%", r.finish_rate * 100.0)) }
+                            td.num.wide { @match r.mean_ratio { Some(x) => (format!("{x:.3}")), None => span.muted { "-" } } }
+                            td.num.wide { (r.played) }
                         }
                     }
                 }

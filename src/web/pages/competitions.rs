@@ -100,18 +100,18 @@ pub(super) fn board_table(lines: &[BoardLine]) -> Markup {
     html! {
         @if lines.is_empty() { p.muted { "No entrant has a version with all its matches played yet." } } @else {
             table.data.board {
-                thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num { "version" } th.num { "mean score" } (ranks::header_cells()) th.num { "finished" } } }
+                thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num.wide { "version" } th.num { "mean score" } (ranks::header_cells()) th.num.wide { "finished" } } }
                 tbody {
                     @for l in lines {
                         tr {
                             (ranks::rank_cell(l.rank, &l.uncertainty))
                             td { (l.entrant) }
                             td { a href={ "/bots/" (l.bot_id) } { (l.bot_name) } }
-                            td.num { (l.version) }
+                            td.num.wide { (l.version) }
                             td.num { (format!("{:.3}", l.mean_score)) }
                             (ranks::interval_cell(&l.uncertainty))
                             (ranks::tie_cell(&l.uncertainty))
-                            td.num { (l.finished) "/" (l.played) }
+                            td.num.wide { (l.finished) "/" (l.played) }
                         }
                     }
                 }

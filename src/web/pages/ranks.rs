@@ -20,9 +20,9 @@ pub(super) fn rank_cell(rank: i64, u: &Uncertainty) -> Markup {
 pub(super) fn interval_cell(u: &Uncertainty) -> Markup {
     html! {
         @if u.withheld {
-            td.num.interval title="not shown over hidden matches: it would tell single matches" { "-" }
+            td.num.interval.wide title="not shown over hidden matches: it would tell single matches" { "-" }
         } @else {
-            td.num.interval { (format!("{:.3}–{:.3}", u.low, u.high)) }
+            td.num.interval.wide { (format!("{:.3}–{:.3}", u.low, u.high)) }
         }
     }
 }
@@ -30,7 +30,7 @@ pub(super) fn interval_cell(u: &Uncertainty) -> Markup {
 /// The tie group when another bot shares it.
 pub(super) fn tie_cell(u: &Uncertainty) -> Markup {
     html! {
-        td.tie {
+        td.tie.wide {
             @if u.tied { span title="not significantly different from the group's first bot" { "tied (group " (u.tie_group) ")" } }
         }
     }
@@ -39,8 +39,8 @@ pub(super) fn tie_cell(u: &Uncertainty) -> Markup {
 /// The header cells of [`interval_cell`] and [`tie_cell`].
 pub(super) fn header_cells() -> Markup {
     html! {
-        th.num title="95% interval of the mean score: a bootstrap over each maze's seeds" { "95% interval" }
-        th { "tie" }
+        th.num.wide title="95% interval of the mean score: a bootstrap over each maze's seeds" { "95% interval" }
+        th.wide { "tie" }
     }
 }
 
