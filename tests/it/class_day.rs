@@ -904,3 +904,117 @@ async fn a_class_link_registers_with_its_competitions_code_and_its_organiser_giv
         .await;
     assert_eq!(s, 403);
 }
+
+/// Presses Tab (at most `max` times) until the focused element matches `css`; how many
+/// presses it took.
+async fn tab_to(b: &Browser, css: &str, max: usize) -> usize {
+    for presses in 0..=max {
+        let here = b
+            .client
+            .execute(
+                "return document.activeElement ? document.activeElement.matches(arguments[0]) : false;",
+                vec![json!(css)],
+            )
+            .await
+            .unwrap();
+        if here == json!(true) {
+            return presses;
+        }
+        keys(b, "\u{e004}").await;
+    }
+    panic!("{css} is not reached with {max} presses of Tab");
+}
+
+/// Types `text` into whatever has the focus (as a keyboard does).
+async fn keys(b: &Browser, text: &str) {
+    use fantoccini::actions::InputSource;
+    let actions = fantoccini::actions::KeyActions::new("keyboard".to_string());
+    let mut actions = actions;
+    for c in text.chars() {
+        actions = actions
+            .then(fantoccini::actions::KeyAction::Down { value: c })
+            .then(fantoccini::actions::KeyAction::Up { value: c });
+    }
+    b.client.perform_actions(actions).await.unwrap();
+}
+
+#[tokio::test]
+async fn a_student_registers_and_submits_with_the_keyboard_alone() {
+    let Some(b) = Browser::start("a_student_registers_and_submits_with_the_keyboard_alone").await
+    else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let base = &server.base;
+    open_competition(&server, "keys-cup").await;
+    // Register: the skip link first, then the form's fields in order, Enter to send.
+    b.open(&format!("{base}/register"), "input[name=name]")
+        .await;
+    keys(&b, "\u{e004}").await;
+    let first = b
+        .client
+        .execute("return document.activeElement.className;", vec![])
+        .await
+        .unwrap();
+    assert_eq!(first, json!("skip"), "the first Tab stop is the skip link");
+    keys(&b, "\u{e007}").await; // Enter: to the content
+    tab_to(&b, "input[name=name]", 5).await;
+    keys(&b, "keyboard-kid").await;
+    tab_to(&b, "textarea[name=members]", 2).await;
+    keys(&b, "Kim").await;
+    tab_to(&b, "form button[type=submit]", 3).await;
+    keys(&b, "\u{e007}").await;
+    b.client
+        .wait()
+        .at_most(std::time::Duration::from_secs(10))
+        .for_element(Locator::Css("#new-key"))
+        .await
+        .unwrap();
+    // Submit a robot: every field reached with Tab, the file named as a file chooser
+    // opened with the keyboard would, the form sent with Enter.
+    b.open(
+        &format!("{base}/competitions/keys-cup/submit"),
+        "form.submit",
+    )
+    .await;
+    tab_to(&b, "input[name=name]", 20).await;
+    keys(&b, "kb-robot").await;
+    tab_to(&b, "input[name=files]", 3).await;
+    let robot = root().join("tests/fixtures/robot_py/robot.py");
+    b.client
+        .active_element()
+        .await
+        .unwrap()
+        .send_keys(&robot.display().to_string())
+        .await
+        .unwrap();
+    tab_to(&b, "input[name=original_task]", 3).await;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    while b
+        .client
+        .execute("return document.activeElement.checked;", vec![])
+        .await
+        .unwrap()
+        != json!(true)
+    {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the form did not tick it"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    }
+    tab_to(&b, "form.submit button[type=submit]", 10).await;
+    keys(&b, "\u{e007}").await;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while b.client.current_url().await.unwrap().path() != "/me" {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the upload never ended on /me: {}",
+            b.source().await
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    }
+    wait_ranked(&server, "keys-cup", "kb-robot", 120).await;
+    b.quit().await;
+}

@@ -207,6 +207,13 @@ async fn an_mms_mouse_uploaded_with_protocol_mms_is_validated_and_plays_on_a_ser
         built["build_status"], "ready",
         "the validation match played it: {built}"
     );
+    // Outside a competition, an mms mouse is validated on a 16x16 maze, the size such
+    // mice are written for.
+    let log = super::support::build_log(&server, id, &token).await;
+    assert!(
+        log.contains("on a public generated 16x16 maze without a fault"),
+        "{log}"
+    );
     // The classic mazes, added as public mazes: the scores `run` gives.
     for n in 1..=3 {
         let layout =
