@@ -47,6 +47,16 @@ pub struct ServeArgs {
     /// Address to listen on (port 0: any free port; the chosen address is printed).
     #[arg(long, env = "MAZEARENA_BIND", default_value = "127.0.0.1:8080")]
     bind: String,
+    /// Try the server: a database and data folder of their own in `--demo-dir`, the
+    /// starter kits' bots (Python, and JavaScript if `node` is installed) registered and
+    /// playing the shipped mazes, and a competition open (`demo-cup`) to take part in.
+    /// `--database` and `--data-dir` are not used.
+    #[arg(long)]
+    demo: bool,
+    /// The demo's folder (its SQLite database and data), made if missing; a demo started
+    /// again goes on where it was.
+    #[arg(long, default_value = "mazearena-demo")]
+    demo_dir: PathBuf,
     /// The database: `sqlite://FILE` (created on first start) or
     /// `postgres://USER:PASSWORD@HOST/DB` (several servers and workers on one database).
     #[arg(
@@ -262,7 +272,14 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
 /// it plays no match; each worker in `workers` reports its own.
 const API_ONLY: &str = "unused";
 
-async fn serve(args: ServeArgs) -> anyhow::Result<()> {
+async fn serve(mut args: ServeArgs) -> anyhow::Result<()> {
+    if args.demo {
+        std::fs::create_dir_all(&args.demo_dir).with_context(|| {
+            format!("cannot create the demo folder {}", args.demo_dir.display())
+        })?;
+        args.database = format!("sqlite://{}", args.demo_dir.join("mazearena.db").display());
+        args.data_dir = args.demo_dir.join("data");
+    }
     let trusted =
         api::client_address::TrustedProxies::parse(&args.trusted_proxies, args.proxy_header)
             .map_err(|e| anyhow::anyhow!("--trusted-proxies: {e}"))?;
@@ -300,6 +317,27 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         Backend::Sqlite => prepare(&storage, &data_dir).await?,
     }
 
+    let demo = if args.demo {
+        let shipped: Vec<i64> = storage
+            .list_mazes()
+            .await?
+            .into_iter()
+            .filter(|m| !m.hidden && DEFAULT_MAZES.iter().any(|(name, _)| *name == m.name))
+            .map(|m| m.maze_id)
+            .collect();
+        let with_node = crate::runner::sandbox::find_program("node").is_some();
+        registry::demo::seed(
+            &storage,
+            &data_dir,
+            &shipped,
+            with_node,
+            crate::storage::now_ms(),
+        )
+        .await
+        .map_err(|e| anyhow::anyhow!("cannot set up the demo: {e}"))?
+    } else {
+        None
+    };
     let admin_token = admin_token(args.admin_token.as_deref(), &data_dir)?;
     if let Some(t) = &args.metrics_token {
         anyhow::ensure!(
@@ -369,6 +407,23 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
                 ""
             }
         );
+    }
+    if args.demo {
+        match &demo {
+            Some(d) => println!(
+                "the demo, in {}: open http://{addr}/ ({} bots of the starter kits play the {} shipped mazes, tournament {}; \
+                 competition {} is open: register at http://{addr}/register to take part)",
+                args.demo_dir.display(),
+                d.bots.len(),
+                DEFAULT_MAZES.len(),
+                d.tournament_id,
+                d.competition,
+            ),
+            None => println!(
+                "the demo, in {}: open http://{addr}/ (as it was left; remove the folder to start it afresh)",
+                args.demo_dir.display()
+            ),
+        }
     }
     use std::io::Write;
     let _ = std::io::stdout().flush();

@@ -24,6 +24,7 @@ pub mod bots;
 pub mod bundles;
 pub mod cache;
 pub mod competitions;
+pub mod demo;
 pub mod entrants;
 pub mod invites;
 pub mod mazes;

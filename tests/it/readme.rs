@@ -689,7 +689,8 @@ fn has_a_test_of_its_own(block: &str) -> bool {
 
 /// Every shell example of the README is run by a test: by the section tests above, in
 /// the README's order, or by `.ci/image.sh` (the container blocks); the Quick start's
-/// two commands are what CI itself runs (the build and `cargo test`). A new section
+/// first command by `the_quick_start_serves_the_demo_as_written`, its second is what CI
+/// itself runs (`cargo test`). A new section
 /// with examples fails here until a test runs it.
 #[test]
 fn every_readme_shell_example_is_run_by_a_test() {
@@ -732,4 +733,121 @@ fn every_readme_shell_example_is_run_by_a_test() {
             && at("Take part") < at("Closing a competition"),
         "the README closes the competition before its entrants take part"
     );
+}
+
+/// The Quick start's first command as written (`cargo run --release -- ARGS`, run as the
+/// built binary with ARGS, here on any free port): a demo server whose pages show bots
+/// that have played and an open competition; started again it goes on where it was.
+#[tokio::test]
+async fn the_quick_start_serves_the_demo_as_written() {
+    use std::io::BufRead;
+    let first = commands(&blocks("Quick start")[0])
+        .into_iter()
+        .next()
+        .unwrap();
+    let args: Vec<String> = first
+        .trim()
+        .strip_prefix("cargo run --release -- ")
+        .unwrap_or_else(|| panic!("the Quick start's first command runs the binary: {first}"))
+        .split_whitespace()
+        .map(str::to_string)
+        .collect();
+    assert_eq!(args, ["serve", "--demo"], "{first}");
+    let dir = tempfile::tempdir().unwrap();
+    let start = || {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_mazearena"))
+            .args(&args)
+            .env("MAZEARENA_BIND", "127.0.0.1:0")
+            .env("MAZEARENA_SANDBOX", sandbox().level())
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("the server starts");
+        let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+        let mut said = String::new();
+        while !said.contains("the demo, in") {
+            let mut line = String::new();
+            assert!(out.read_line(&mut line).unwrap() > 0, "it ended: {said}");
+            said.push_str(&line);
+        }
+        let base = said
+            .split("open http://")
+            .nth(1)
+            .and_then(|rest| rest.split('/').next())
+            .map(|addr| format!("http://{addr}"))
+            .unwrap_or_else(|| panic!("no address in {said}"));
+        (child, base, said)
+    };
+    let (mut child, base, said) = start();
+    assert!(said.contains("competition demo-cup is open"), "{said}");
+    let http = reqwest::Client::new();
+    let json = |path: String| {
+        let http = &http;
+        async move {
+            http.get(path)
+                .send()
+                .await
+                .unwrap()
+                .json::<serde_json::Value>()
+                .await
+                .unwrap()
+        }
+    };
+    let bots = json(format!("{base}/api/bots")).await;
+    let count = bots.as_array().unwrap().len();
+    assert!(count >= 4, "the Python kit's bots at least: {bots}");
+    let tournament = said
+        .split("tournament ")
+        .nth(1)
+        .and_then(|rest| rest.split(';').next())
+        .unwrap()
+        .to_string();
+    // Within a couple of minutes every bot has played the shipped mazes and is ranked
+    // in the open competition.
+    let deadline = Instant::now() + Duration::from_secs(240);
+    loop {
+        let t = json(format!("{base}/api/tournaments/{tournament}")).await;
+        let board = json(format!("{base}/api/competitions/demo-cup/leaderboard")).await;
+        let ranked = board["standings"].as_array().map_or(0, Vec::len);
+        if t["done"] == t["total"]
+            && t["total"].as_i64() == Some(9 * count as i64)
+            && ranked == count
+        {
+            break;
+        }
+        assert!(Instant::now() < deadline, "not played yet: {t} {board}");
+        tokio::time::sleep(Duration::from_millis(500)).await;
+    }
+    for (path, text) in [
+        ("/", "mazearena"),
+        ("/competitions/demo-cup", "The Demo Cup"),
+        ("/register", "Register"),
+    ] {
+        let page = http.get(format!("{base}{path}")).send().await.unwrap();
+        assert_eq!(page.status(), 200, "{path}");
+        assert!(page.text().await.unwrap().contains(text), "{path}");
+    }
+    let page = http
+        .get(format!("{base}/tournaments/{tournament}"))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    assert!(page.contains("simple-python"), "{page}");
+    // Stopped and started again: the same demo, nothing registered twice.
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGINT,
+    )
+    .unwrap();
+    child.wait().unwrap();
+    let (mut child, base, said) = start();
+    assert!(said.contains("as it was left"), "{said}");
+    let again = json(format!("{base}/api/bots")).await;
+    assert_eq!(again.as_array().unwrap().len(), count, "{again}");
+    let _ = child.kill();
+    let _ = child.wait();
 }
