@@ -348,6 +348,7 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
         let entrant = who.kind == "entrant";
         let mine = my_bots(&who, &cfg);
         let existing = mine.iter().find(|b| b.1 == bot.name);
+        let entered_now = existing.is_none() && entrant && args.competition.is_some();
         let (bot_id, version) = match existing {
             Some((id, _, token)) => {
                 // The key acts for its own bots; a bot registered without one uploads
@@ -362,9 +363,13 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
                 (*id, v["version"].as_i64().unwrap_or(0))
             }
             None => {
-                let v: Value = api
-                    .post_form("/api/bots", form().text("name", bot.name.clone()))
-                    .await?;
+                // A new bot of an entrant is entered in the competition in the same step
+                // (validated by its rule); the entry below then finds it there.
+                let mut f = form().text("name", bot.name.clone());
+                if let (true, Some(c)) = (entrant, &args.competition) {
+                    f = f.text("competition", c.clone());
+                }
+                let v: Value = api.post_form("/api/bots", f).await?;
                 let id = v["bot_id"].as_i64().context("the server sent no bot id")?;
                 if !entrant {
                     // Not an entrant's bot: keep its owner token to upload versions later.
@@ -383,7 +388,9 @@ pub fn submit(args: SubmitArgs) -> anyhow::Result<()> {
             }
         };
         println!("uploaded {} version {version} (bot {bot_id})", bot.name);
-        if let Some(c) = &args.competition {
+        if let (true, Some(c)) = (entered_now, &args.competition) {
+            println!("entered {} in competition {c}", bot.name);
+        } else if let Some(c) = &args.competition {
             match api
                 .post::<Value>(
                     &format!("/api/competitions/{c}/entries"),

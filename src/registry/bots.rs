@@ -122,8 +122,9 @@ fn with_robot_command(submission: &mut Submission, stored: &Stored) -> Result<()
 }
 
 /// Registers a bot named `name` with its first version, the bot of `entrant` if given
-/// and held by `owner`'s quotas if given ([`super::owners`]); its files are stored as a
-/// bundle (`scratch`: a local folder to unpack in).
+/// (entered in competition `enter` in the same step, if given) and held by `owner`'s
+/// quotas if given ([`super::owners`]); its files are stored as a bundle (`scratch`: a
+/// local folder to unpack in).
 ///
 /// # Errors
 /// [`RegistryError::Invalid`] (name, command, environment), [`RegistryError::Conflict`]
@@ -136,6 +137,7 @@ pub async fn register(
     scratch: &Path,
     entrant: Option<i64>,
     owner: Option<&OwnerLimits>,
+    enter: Option<i64>,
 ) -> Result<Registered> {
     check_name(name)?;
     check_submission(&submission)?;
@@ -154,6 +156,7 @@ pub async fn register(
             entrant,
             &stored_version(&submission, &summary),
             owner,
+            enter,
         )
         .await?
     {
@@ -350,6 +353,7 @@ mod tests {
             scratch.path(),
             None,
             None,
+            None,
         )
         .await
         .unwrap();
@@ -428,7 +432,7 @@ mod tests {
                 },
             ),
         ] {
-            let err = register(&db, name, s, scratch.path(), None, None)
+            let err = register(&db, name, s, scratch.path(), None, None, None)
                 .await
                 .unwrap_err();
             assert!(matches!(err, RegistryError::Invalid(_)), "{name}: {err}");
@@ -440,6 +444,7 @@ mod tests {
             scratch.path(),
             None,
             None,
+            None,
         )
         .await
         .unwrap_err();
@@ -447,10 +452,10 @@ mod tests {
         assert_eq!(db.bundle_totals().await.unwrap().0, 0);
         assert!(db.list_bots().await.unwrap().is_empty());
 
-        register(&db, "f", ok.clone(), scratch.path(), None, None)
+        register(&db, "f", ok.clone(), scratch.path(), None, None, None)
             .await
             .unwrap();
-        let err = register(&db, "f", ok.clone(), scratch.path(), None, None)
+        let err = register(&db, "f", ok.clone(), scratch.path(), None, None, None)
             .await
             .unwrap_err();
         assert!(matches!(err, RegistryError::Conflict(_)), "{err}");

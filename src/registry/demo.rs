@@ -198,15 +198,9 @@ pub async fn seed(
             scratch,
             Some(entrant.entrant_id),
             None,
+            Some(c.competition_id),
         )
         .await?;
-        storage
-            .enter_competition(
-                c.competition_id,
-                registered.version.bot_id,
-                entrant.entrant_id,
-            )
-            .await?;
         names.push(name.to_string());
         versions.push(registered.version.bot_version_id);
     }

@@ -178,9 +178,10 @@ impl Storage {
         Ok(row)
     }
 
-    /// Registers a bot as [`Storage::create_bot`] does, the bot of `entrant` if given,
-    /// unless `owner`'s quotas are used up (counted in the same transaction under the
-    /// owner's lock): then nothing is written and the refusal is returned.
+    /// Registers a bot as [`Storage::create_bot`] does, the bot of `entrant` if given
+    /// (entered in competition `enter` too, if given), unless `owner`'s quotas are used
+    /// up (counted in the same transaction under the owner's lock): then nothing is
+    /// written and the refusal is returned.
     ///
     /// # Errors
     /// [`StorageError::Conflict`] when the name is taken; database failures.
@@ -191,6 +192,7 @@ impl Storage {
         entrant: Option<i64>,
         first: &NewVersion<'_>,
         owner: Option<&OwnerLimits>,
+        enter: Option<i64>,
     ) -> Result<std::result::Result<BotVersionRow, VersionRefusal>> {
         let mut tx = self.begin_write().await?;
         if let Some(limits) = owner
@@ -201,6 +203,31 @@ impl Storage {
         }
         let bot_id = insert_bot(&mut tx, name, owner_token_hash, entrant).await?;
         let row = insert_version(&mut tx, bot_id, first).await?;
+        // Entered in the same transaction: the builder never sees the version without
+        // its competition (whose rule and practice mazes validate it).
+        if let (Some(competition_id), Some(entrant_id)) = (enter, entrant) {
+            sqlx::query(
+                "insert into competition_entry (competition_id, bot_id, entrant_id, first_version_id, entered_at)
+                 values ($1, $2, $3, $4, $5)",
+            )
+            .bind(competition_id)
+            .bind(bot_id)
+            .bind(entrant_id)
+            .bind(row.bot_version_id)
+            .bind(now_ms())
+            .execute(&mut *tx)
+            .await
+            .map_err(|e| {
+                if is_unique_violation(&e) {
+                    StorageError::Conflict(
+                        "this entrant has a bot in this competition already (one bot per entrant)"
+                            .into(),
+                    )
+                } else {
+                    e.into()
+                }
+            })?;
+        }
         tx.commit().await?;
         Ok(Ok(row))
     }

@@ -232,7 +232,7 @@ mod tests {
                 most_build_ms: Some(60_000),
             };
             let first = db
-                .create_bot_within("o", "ho", None, &with_build(), Some(&limits))
+                .create_bot_within("o", "ho", None, &with_build(), Some(&limits), None)
                 .await
                 .unwrap()
                 .unwrap();
@@ -258,7 +258,7 @@ mod tests {
                     .unwrap();
             }
             // Another owner is not held by it.
-            db.create_bot_within("x", "hx", None, &with_build(), Some(&limits))
+            db.create_bot_within("x", "hx", None, &with_build(), Some(&limits), None)
                 .await
                 .unwrap()
                 .unwrap();
@@ -307,12 +307,26 @@ mod tests {
                 most_pending: Some(1),
                 ..limits.clone()
             };
-            db.create_bot_within("e1", "he1", Some(e.entrant_id), &with_build(), Some(&mine))
-                .await
-                .unwrap()
-                .unwrap();
+            db.create_bot_within(
+                "e1",
+                "he1",
+                Some(e.entrant_id),
+                &with_build(),
+                Some(&mine),
+                None,
+            )
+            .await
+            .unwrap()
+            .unwrap();
             let refused = db
-                .create_bot_within("e2", "he2", Some(e.entrant_id), &with_build(), Some(&mine))
+                .create_bot_within(
+                    "e2",
+                    "he2",
+                    Some(e.entrant_id),
+                    &with_build(),
+                    Some(&mine),
+                    None,
+                )
                 .await
                 .unwrap()
                 .unwrap_err();

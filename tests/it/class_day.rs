@@ -1018,3 +1018,172 @@ async fn a_student_registers_and_submits_with_the_keyboard_alone() {
     wait_ranked(&server, "keys-cup", "kb-robot", 120).await;
     b.quit().await;
 }
+
+#[tokio::test]
+async fn each_competition_validates_by_its_own_rule_and_its_organiser_changes_it_and_its_practice_mazes()
+ {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &[]);
+    let (_, teacher) = organiser(&server, "rules-teacher").await;
+    let now = mazearena::storage::now_ms();
+    let layout = |dim, seed| {
+        mazearena::engine::mazefile::numeric::write(
+            &mazearena::engine::generator::generate(dim, seed).unwrap(),
+        )
+    };
+    let robot =
+        std::fs::read_to_string(root().join("tests/fixtures/robot_sizes/robot.py")).unwrap();
+    let mut logs = Vec::new();
+    for (i, rule) in ["start", "match", "off"].iter().enumerate() {
+        let name = format!("cup-{rule}");
+        let seed = 9600 + 10 * i as u64;
+        let spec = json!({
+            "name": name, "title": name, "validation": rule,
+            "opens_at": mazearena::competition::Timestamp(now - 1000).rfc3339(),
+            "closes_at": mazearena::competition::Timestamp(now + 3_600_000).rfc3339(),
+            "mazes": {
+                "practice": [{"name": "warm-up", "layout": layout(14, seed)}],
+                "public": [{"name": "p1", "layout": layout(12, seed + 1)}],
+                "private": [{"name": "q1", "layout": layout(12, seed + 2)}],
+            },
+        });
+        let (s, c) = server.post("/api/competitions", spec, Some(&teacher)).await;
+        assert_eq!(s, 201, "{c}");
+        assert_eq!(c["validation"], *rule);
+        // Registered and entered in one step: validated by the competition's rule.
+        let key = entrant(&server, &format!("student-{rule}")).await;
+        let (s, bot) = server
+            .post(
+                "/api/bots",
+                json!({"name": format!("sizes-{rule}"), "original_task": true,
+                       "competition": name, "files": {"robot.py": robot}}),
+                Some(&key),
+            )
+            .await;
+        assert_eq!(s, 201, "{bot}");
+        let id = bot["bot_id"].as_i64().unwrap();
+        let built = super::support::wait_built(&server, id).await;
+        let log = super::support::build_log(&server, id, &key).await;
+        logs.push((rule.to_string(), built["build_status"].clone(), log));
+    }
+    let (_, status, log) = &logs[0];
+    assert_eq!(status, "ready", "{log}");
+    assert!(
+        log.contains("KeyError: 14") && log.contains("warning: "),
+        "{log}"
+    );
+    assert!(
+        log.contains("public generated 16x16 maze without a fault"),
+        "{log}"
+    );
+    let (_, status, log) = &logs[1];
+    assert_eq!(status, "invalid", "{log}");
+    assert!(
+        log.contains("KeyError: 14") && log.contains("This version is invalid"),
+        "{log}"
+    );
+    assert!(
+        !log.contains("16x16"),
+        "match: the first practice maze only: {log}"
+    );
+    let (_, status, log) = &logs[2];
+    assert_eq!(status, "ready", "{log}");
+    assert!(!log.contains("validation match"), "off: {log}");
+
+    // The organiser's page: practice mazes added and removed, the rule changed; each
+    // form answers with the page and what was done.
+    let web = Web::new(&server);
+    let session = web.login(&teacher).await;
+    let token = web
+        .get("/competitions/cup-off/manage", Some(&session))
+        .await
+        .csrf();
+    let form = reqwest::multipart::Form::new()
+        .text("csrf", token.clone())
+        .part(
+            "maze",
+            reqwest::multipart::Part::text(layout(16, 9700)).file_name("big-one.txt"),
+        );
+    let added = web
+        .http
+        .post(format!("{}/competitions/cup-off/practice", server.base))
+        .header("cookie", format!("mazearena_session={session}"))
+        .header("origin", &server.base)
+        .multipart(form)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(added.status(), 303);
+    assert_eq!(
+        added.headers()["location"],
+        "/competitions/cup-off/manage?done=practice_added"
+    );
+    let (_, view) = server.get("/api/competitions/cup-off", None).await;
+    let practice: Vec<Value> = view["mazes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["set"] == "practice")
+        .cloned()
+        .collect();
+    assert_eq!(practice.len(), 2, "{view}");
+    let first = practice[0]["maze_id"].to_string();
+    let removed = web
+        .post(
+            "/competitions/cup-off/practice",
+            Some(&session),
+            &[("csrf", &token), ("remove", &first)],
+        )
+        .await;
+    assert_eq!(removed.status, 303, "{}", removed.body);
+    let saved = web
+        .post(
+            "/competitions/cup-off/edit",
+            Some(&session),
+            &[("csrf", &token), ("validation", "match")],
+        )
+        .await;
+    assert_eq!(saved.status, 303, "{}", saved.body);
+    let (_, view) = server.get("/api/competitions/cup-off", None).await;
+    assert_eq!(view["validation"], "match", "{view}");
+    let names: Vec<&str> = view["mazes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["set"] == "practice")
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["big-one"], "{view}");
+
+    // And on the server's machine, the command line.
+    let maze_file = dir.path().join("extra-maze.txt");
+    std::fs::write(&maze_file, layout(12, 9710)).unwrap();
+    let out = mazearena(&[
+        "competition",
+        "edit",
+        "cup-off",
+        "--validation",
+        "off",
+        "--add-practice",
+        maze_file.to_str().unwrap(),
+        "--remove-practice",
+        "big-one",
+        "--database",
+        &server.database,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (_, view) = server.get("/api/competitions/cup-off", None).await;
+    assert_eq!(view["validation"], "off", "{view}");
+    let names: Vec<&str> = view["mazes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["set"] == "practice")
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["extra-maze"], "{view}");
+}

@@ -51,6 +51,11 @@ pub struct BotUpload {
     /// set to `true` or `on`.)
     #[serde(default)]
     pub original_task: bool,
+    /// Registration only, with an entrant's key: enter the new bot in this competition
+    /// (its short name) in the same step, so that its first version is validated by
+    /// the competition's rule on its practice mazes. (Form: `competition`.)
+    #[serde(default)]
+    pub competition: Option<String>,
     /// With `original_task`: the file that holds `class Robot`, at the top of the files
     /// (e.g. `robot_final.py`); left out: `robot.py`, or else the only top-level `.py`
     /// file that defines `class Robot`. The command then names it. (Form: `robot_file`.)
@@ -240,7 +245,8 @@ async fn create_bot(
 ) -> ApiResult<(StatusCode, axum::Json<BotCreated>)> {
     let client = super::client_address::of_request(&request);
     let upload = read_upload(&state, request).await?;
-    let created = register_bot(&state, &caller, client, upload).await?;
+    let enter = upload.competition.clone();
+    let created = register_bot(&state, &caller, client, upload, enter.as_deref()).await?;
     Ok((StatusCode::CREATED, axum::Json(created)))
 }
 
@@ -254,6 +260,7 @@ pub(crate) async fn register_bot(
     caller: &Caller,
     client: Option<std::net::IpAddr>,
     upload: Upload,
+    enter: Option<&str>,
 ) -> ApiResult<BotCreated> {
     // With an entrant's key the bot is the entrant's, held by the entrant's quotas;
     // without one, only an open server takes it, on its address's budget
@@ -261,6 +268,33 @@ pub(crate) async fn register_bot(
     let entrant = match caller {
         Caller::Token(hash) => state.storage.entrant_by_key(hash).await?,
         _ => None,
+    };
+    // Entered in a competition in the same step: the entrant's, while it takes part.
+    let enter = match enter.map(str::trim).filter(|n| !n.is_empty()) {
+        Some(name) => {
+            let c = super::competitions::find(state, name).await?;
+            if entrant.is_none() {
+                return Err(ApiError::Forbidden(format!(
+                    "entering competition {} needs an entrant's key (Authorization: Bearer KEY)",
+                    c.name
+                )));
+            }
+            if c.kind != "competition" {
+                return Err(ApiError::Conflict(
+                    "the default competition needs no entry: every bot's latest version counts"
+                        .into(),
+                ));
+            }
+            if registry::competitions::phase(&c, crate::storage::now_ms()).is_closed() {
+                return Err(ApiError::Conflict(format!(
+                    "competition {} closed at {}",
+                    c.name,
+                    crate::competition::Timestamp(c.closes_at.unwrap_or(0)).words()
+                )));
+            }
+            Some(c.competition_id)
+        }
+        None => None,
     };
     if entrant.is_none() && !caller.is_admin() {
         let registration = state.storage.registration().await?;
@@ -283,7 +317,7 @@ pub(crate) async fn register_bot(
     let owner = match (&entrant, caller.is_admin()) {
         (Some(e), false) => Some(state.settings.owner_quotas.limits(
             Owner::Entrant(e.entrant_id),
-            true,
+            enter.is_none(),
             now,
         )),
         _ => None,
@@ -301,6 +335,7 @@ pub(crate) async fn register_bot(
         &state.settings.scratch(),
         entrant.as_ref().map(|e| e.entrant_id),
         owner.as_ref(),
+        enter,
     )
     .await?;
     state.wake.notify_waiters();

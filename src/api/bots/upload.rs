@@ -27,6 +27,7 @@ pub(crate) struct Upload {
     pub original_task: bool,
     pub robot_file: Option<String>,
     pub protocol: Option<String>,
+    pub competition: Option<String>,
 }
 
 /// Whether a form's checkbox value is set.
@@ -59,6 +60,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         let mut runtime = None;
         let mut original_task = false;
         let mut robot_file = None;
+        let mut competition = None;
         let mut protocol = None;
         let mut env = Vec::new();
         while let Some(field) = form.next_field().await? {
@@ -69,6 +71,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "runtime" => runtime = Some(field.text().await?),
                 "original_task" => original_task = checked(&field.text().await?),
                 "robot_file" => robot_file = Some(field.text().await?),
+                "competition" => competition = Some(field.text().await?),
                 "protocol" => protocol = Some(field.text().await?),
                 "env" => {
                     let text = field.text().await?;
@@ -77,7 +80,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
                 "archive" => archive = Some(field.bytes().await?.to_vec()),
                 other => {
                     return Err(ApiError::BadRequest(format!(
-                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, robot_file, protocol, archive"
+                        "unknown form field {other:?}: expected name, command, build, env, runtime, original_task, robot_file, competition, protocol, archive"
                     )));
                 }
             }
@@ -91,6 +94,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
             runtime,
             original_task,
             robot_file,
+            competition,
             protocol,
             archive: Some(archive.ok_or_else(|| {
                 ApiError::Unprocessable("the form needs an `archive` file field".into())
@@ -118,6 +122,7 @@ pub(super) async fn read_upload(state: &AppState, request: Request) -> ApiResult
         runtime: body.runtime,
         original_task: body.original_task,
         robot_file: body.robot_file,
+        competition: body.competition,
         protocol: body.protocol,
     })
 }

@@ -577,10 +577,9 @@ pub(super) async fn submit(
                 .map_err(|e| PageError::from(e).with_page(again))?;
         }
         None => {
-            let created = super::super::bots::register_bot(&state, caller, client, upload)
-                .await
-                .map_err(|e| PageError::from(e).with_page(again))?;
-            super::super::competitions::enter_bot(&state, caller, &name, created.bot_id)
+            // Registered and entered in one step: its first version is validated by the
+            // competition's rule.
+            super::super::bots::register_bot(&state, caller, client, upload, Some(&name))
                 .await
                 .map_err(|e| PageError::from(e).with_page(again))?;
         }
