@@ -137,9 +137,9 @@ pub(crate) async fn find_entrants(
     if !(1..=500).contains(&limit) {
         return Err(ApiError::BadRequest("limit: 1 to 500".into()));
     }
-    if search.chars().count() > 100 {
+    if search.chars().count() > 100 || search.chars().any(char::is_control) {
         return Err(ApiError::BadRequest(
-            "search: at most 100 characters".into(),
+            "search: at most 100 characters, no control characters".into(),
         ));
     }
     Ok(crate::registry::entrants::find(&state.storage, search, limit).await?)

@@ -235,7 +235,8 @@ pub struct BotDetail {
         (status = 201, body = BotCreated),
         (status = 400, body = ErrorBody), (status = 409, body = ErrorBody),
         (status = 413, body = ErrorBody), (status = 422, body = ErrorBody),
-        (status = 403, body = ErrorBody, description = "registration is not open and no entrant's key was given"),
+        (status = 404, body = ErrorBody, description = "no competition of the name given in `competition`"),
+        (status = 403, body = ErrorBody, description = "registration is not open and no entrant's key was given, or `competition` without an entrant's key"),
         (status = 429, body = ErrorBody, description = "a budget is used up: registrations without a key from this address, or the entrant's quotas (the message says whose); see Retry-After"),
     ))]
 async fn create_bot(
