@@ -519,7 +519,7 @@ async fn a_hostile_servers_texts_reach_the_terminal_escaped() {
         assert!(stderr.contains(status), "{args:?}: {stderr}");
     }
 
-    // Submit: the refusal to enter, the build's status and its failed log.
+    // Submit a new bot, entered in the same step: the build's status and its failed log.
     let bot = dir.path().join("bot");
     std::fs::create_dir(&bot).unwrap();
     std::fs::write(
@@ -537,10 +537,13 @@ async fn a_hostile_servers_texts_reach_the_terminal_escaped() {
         stdout.contains("uploaded plain version 2 (bot 7)"),
         "{stdout}"
     );
+    assert!(
+        stdout.contains("entered plain in competition cup"),
+        "{stdout}"
+    );
     shows_escaped(&stderr, "submit");
     assert!(
-        stderr.contains("competition cup: evil\\x1b]52")
-            && stderr.contains("--- build log ---\nmake: evil\\x1b")
+        stderr.contains("--- build log ---\nmake: evil\\x1b")
             && stderr.contains("\n\tcc -o bot bot.c\nfailed\\x08\\x08ok"),
         "{stderr}"
     );
