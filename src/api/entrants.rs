@@ -245,12 +245,18 @@ pub(crate) async fn register(
     if !caller.is_admin() {
         use super::limits::{Spend, spend};
         let mode = state.storage.registration().await?;
-        let server_code =
-            |code: &str| matches!(&mode, Registration::Invite(h) if hash_token(code) == *h);
-        if let (Some(code), None) = (given, &through) {
-            // A code that is no competition's and not the server's: a wrong code,
-            // whatever the mode (a student who followed a mistyped link should hear so).
-            if !server_code(code) {
+        match (given.map(hash_token), through.is_some(), mode) {
+            // A competition's own code, whatever the mode, or the server's: the code's
+            // budget.
+            (Some(hash), true, _) => {
+                spend(state, Spend::InviteRegistration(&hash), client).await?;
+            }
+            (Some(hash), false, Registration::Invite(server)) if hash == server => {
+                spend(state, Spend::InviteRegistration(&hash), client).await?;
+            }
+            // Any other code is a wrong one, whatever the mode (a student who followed a
+            // mistyped link should hear so): the address's budget of guesses.
+            (Some(_), false, _) => {
                 spend(state, Spend::WrongInviteCode, client).await?;
                 return Err(ApiError::Forbidden(
                     "this invite code is not known on this server: check it, or the link, with \
@@ -258,41 +264,20 @@ pub(crate) async fn register(
                         .into(),
                 ));
             }
-        }
-        if let (Some(code), Some(_)) = (given, &through) {
-            spend(state, Spend::InviteRegistration(&hash_token(code)), client).await?;
-        } else {
-            match mode {
-                Registration::Open => {
-                    if !caller.can_organise() {
-                        spend(state, Spend::AnonymousRegistration, client).await?;
-                    }
+            (None, _, Registration::Open) => {
+                if !caller.can_organise() {
+                    spend(state, Spend::AnonymousRegistration, client).await?;
                 }
-                Registration::Closed => {
-                    return Err(ApiError::Forbidden(
-                        "registration is closed: the admin registers entrants".into(),
-                    ));
-                }
-                Registration::Invite(hash) => {
-                    let raw = body.invite_code.as_deref().unwrap_or("");
-                    let given = raw.trim();
-                    if given.is_empty() {
-                        return Err(ApiError::Forbidden(
-                            "registration is by invite: give the invite code (`invite_code`)"
-                                .into(),
-                        ));
-                    }
-                    // A code pasted with a space around it is still the code.
-                    if hash_token(given) != hash && hash_token(raw) != hash {
-                        spend(state, Spend::WrongInviteCode, client).await?;
-                        return Err(ApiError::Forbidden(
-                            "this invite code is not the one for this server: check it with your \
-                         organiser (`invite_code`)"
-                                .into(),
-                        ));
-                    }
-                    spend(state, Spend::InviteRegistration(&hash), client).await?;
-                }
+            }
+            (None, _, Registration::Closed) => {
+                return Err(ApiError::Forbidden(
+                    "registration is closed: the admin registers entrants".into(),
+                ));
+            }
+            (None, _, Registration::Invite(_)) => {
+                return Err(ApiError::Forbidden(
+                    "registration is by invite: give the invite code (`invite_code`)".into(),
+                ));
             }
         }
     }

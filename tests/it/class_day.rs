@@ -1146,13 +1146,7 @@ async fn each_competition_validates_by_its_own_rule_and_its_organiser_changes_it
     assert_eq!(saved.status, 303, "{}", saved.body);
     let (_, view) = server.get("/api/competitions/cup-off", None).await;
     assert_eq!(view["validation"], "match", "{view}");
-    let names: Vec<&str> = view["mazes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|m| m["set"] == "practice")
-        .map(|m| m["name"].as_str().unwrap())
-        .collect();
+    let names = practice_names(&view);
     assert_eq!(names, ["big-one"], "{view}");
 
     // And on the server's machine, the command line.
@@ -1178,12 +1172,60 @@ async fn each_competition_validates_by_its_own_rule_and_its_organiser_changes_it
     );
     let (_, view) = server.get("/api/competitions/cup-off", None).await;
     assert_eq!(view["validation"], "off", "{view}");
-    let names: Vec<&str> = view["mazes"]
+    let names = practice_names(&view);
+    assert_eq!(names, ["extra-maze"], "{view}");
+}
+
+/// The names of a competition's practice mazes in its API view, in order.
+fn practice_names(view: &Value) -> Vec<String> {
+    view["mazes"]
         .as_array()
         .unwrap()
         .iter()
         .filter(|m| m["set"] == "practice")
-        .map(|m| m["name"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["extra-maze"], "{view}");
+        .map(|m| m["name"].as_str().unwrap().to_string())
+        .collect()
+}
+
+#[tokio::test]
+async fn guessing_invite_codes_through_the_registration_page_spends_guesses_and_the_right_code_never_does()
+ {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--logins-per-hour", "3"]);
+    let (_, teacher) = organiser(&server, "guess-teacher").await;
+    create_open(&server, &teacher, "guess-cup", 9800).await;
+    let (s, _, _) = server
+        .call(
+            reqwest::Method::PUT,
+            "/api/competitions/guess-cup/invite",
+            Some(json!({"invite_code": "the-right-one"})),
+            Some(&teacher),
+        )
+        .await;
+    assert_eq!(s, 200);
+    // The page is no free oracle: each wrong code costs a guess, then 429.
+    let mut statuses = Vec::new();
+    for i in 0..5 {
+        let (s, _) = server
+            .get_text(&format!("/register?invite=wrong-guess-{i}"))
+            .await;
+        statuses.push(s);
+    }
+    assert_eq!(statuses, [200, 200, 200, 429, 429]);
+    // The class, from the same address, is not held up by it.
+    for _ in 0..5 {
+        let (s, page) = server.get_text("/register?invite=the-right-one").await;
+        assert_eq!(s, 200);
+        assert!(page.contains("You are registering for"), "{page}");
+    }
+    for i in 0..5 {
+        let (s, e) = server
+            .post(
+                "/api/entrants",
+                json!({"name": format!("pupil-{i}"), "invite_code": "the-right-one"}),
+                None,
+            )
+            .await;
+        assert_eq!(s, 201, "{e}");
+    }
 }

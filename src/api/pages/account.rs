@@ -16,7 +16,8 @@ use super::super::error::{ApiError, AppPath, AppQuery};
 use super::super::limits;
 use super::super::session::{self, Visitor};
 use super::forms::{
-    PageError, PageResult, client_of, local_next, login_first, read_form, see_other,
+    PageError, PageResult, client_of, local_next, login_first, no_store, read_form,
+    read_token_form, see_other,
 };
 use crate::storage::bots::build_status;
 use crate::storage::matches::{MatchFilter, Page};
@@ -81,20 +82,13 @@ pub(super) async fn login(
     Ok(see_other(&next, Some(cookie)))
 }
 
-/// A form with nothing but its anti-forgery token.
-#[derive(Debug, Deserialize)]
-struct TokenForm {
-    csrf: Option<String>,
-}
-
 pub(super) async fn logout(
     State(state): State<AppState>,
     visitor: Visitor,
     request: Request,
 ) -> PageResult {
     let secure = session::secure(&state, request.headers());
-    let form: TokenForm = read_form(&state, request).await?;
-    visitor.check_csrf(form.csrf.as_deref())?;
+    read_token_form(&state, &visitor, request).await?;
     if let Some(s) = &visitor.session {
         state.storage.end_session(&s.hash).await?;
     }
@@ -212,16 +206,12 @@ pub(super) async fn register(
 
 /// A page that shows a new key, with the new session's cookie; no cache keeps it.
 fn key_page(html: String, cookie: cookie::Cookie<'static>) -> Response {
-    let mut response = Html(html).into_response();
+    let mut response = no_store(html);
     if let Ok(v) = axum::http::HeaderValue::from_str(&cookie.to_string()) {
         response
             .headers_mut()
             .append(axum::http::header::SET_COOKIE, v);
     }
-    response.headers_mut().insert(
-        axum::http::header::CACHE_CONTROL,
-        axum::http::HeaderValue::from_static("no-store"),
-    );
     response
 }
 
@@ -258,9 +248,8 @@ pub(super) async fn me_page(State(state): State<AppState>, visitor: Visitor) -> 
 
 /// The "me" page's data for a signed-in `visitor`.
 async fn me_data(state: &AppState, visitor: &Visitor) -> PageResult<account::MePage> {
-    let state = state.clone();
     let caller = &visitor.caller;
-    let (who, kind) = who(&state, caller).await?;
+    let (who, kind) = who(state, caller).await?;
     let owned = match caller {
         Caller::Token(hash) => state.storage.bots_owned_by(hash).await?,
         _ => Vec::new(),
@@ -293,7 +282,7 @@ async fn me_data(state: &AppState, visitor: &Visitor) -> PageResult<account::MeP
                 continue;
             }
             let phase = crate::registry::competitions::phase(&c, now);
-            let mine = super::super::competitions::my_submissions(&state, caller, &c.name).await?;
+            let mine = super::super::competitions::my_submissions(state, caller, &c.name).await?;
             if phase.is_closed() && mine.bot_id.is_none() {
                 continue;
             }

@@ -219,3 +219,33 @@ mod tests {
         assert_eq!(encode_path("/a b?c"), "/a%20b%3Fc");
     }
 }
+
+/// A form with nothing but its anti-forgery token.
+#[derive(Debug, serde::Deserialize)]
+pub(super) struct TokenForm {
+    pub(super) csrf: Option<String>,
+}
+
+/// Reads a form that holds nothing but its anti-forgery token, and checks the token.
+///
+/// # Errors
+/// A malformed form; no session, or not its token.
+pub(super) async fn read_token_form(
+    state: &AppState,
+    visitor: &Visitor,
+    request: Request,
+) -> PageResult<()> {
+    let form: TokenForm = read_form(state, request).await?;
+    visitor.check_csrf(form.csrf.as_deref())?;
+    Ok(())
+}
+
+/// A page that shows a key, shown once: no cache keeps it.
+pub(super) fn no_store(html: String) -> Response {
+    let mut response = axum::response::Html(html).into_response();
+    response.headers_mut().insert(
+        header::CACHE_CONTROL,
+        axum::http::HeaderValue::from_static("no-store"),
+    );
+    response
+}

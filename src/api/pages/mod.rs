@@ -27,6 +27,7 @@ use crate::web::viewer::ViewerData;
 
 mod account;
 mod board;
+mod class;
 mod competitions;
 mod forms;
 mod organise;
@@ -68,6 +69,7 @@ pub(super) fn router() -> Router<AppState> {
             ),
         )
         .merge(organise::router())
+        .merge(class::router())
         .layer(axum::middleware::from_fn(super::session::refuse_cross_site))
 }
 
