@@ -90,7 +90,7 @@ pub fn sandbox_exec_if_asked() -> Option<std::process::ExitCode> {
     } else if step == ENTER_SUBCOMMAND {
         Some(sandbox::sandbox_enter(&args[2..]))
     } else if step == SERVE_SUBCOMMAND {
-        Some(sandbox::sandbox_serve())
+        Some(sandbox::sandbox_serve(&args[2..]))
     } else {
         None
     }

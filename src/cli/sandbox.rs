@@ -33,6 +33,12 @@ pub struct SandboxArgs {
     /// variable, name none).
     #[arg(long = "runtime", value_name = "DIR")]
     runtime: Vec<PathBuf>,
+    /// Network namespaces each warm sandbox (servers, workers, tournaments) makes
+    /// before the matches that take them, so that a match's start does not wait for
+    /// one; 0 makes each match's as it starts (to measure what making them ahead saves).
+    #[arg(long, env = "MAZEARENA_SANDBOX_AHEAD", default_value_t = 1,
+          value_parser = clap::value_parser!(u8).range(0..=8))]
+    sandbox_ahead: u8,
 }
 
 /// The variable that lists runtimes when `--runtime` is not given.
@@ -63,6 +69,7 @@ impl SandboxArgs {
             runtimes: self.runtimes(),
             detect: local,
             reuse: false,
+            ahead: usize::from(self.sandbox_ahead),
         }
     }
 
@@ -186,10 +193,19 @@ pub fn sandbox_enter(args: &[std::ffi::OsString]) -> std::process::ExitCode {
     })
 }
 
-/// `mazearena sandbox-serve`: a warm sandbox's supervisor (not for people). Ends when
-/// the runner closes its socket; on failure with [`jail::SETUP_FAILED`].
-pub fn sandbox_serve() -> std::process::ExitCode {
-    match crate::runner::sandbox::supervisor::serve() {
+/// `mazearena sandbox-serve [--ahead N]`: a warm sandbox's supervisor (not for
+/// people). Ends when the runner closes its socket; on failure with
+/// [`jail::SETUP_FAILED`].
+pub fn sandbox_serve(args: &[std::ffi::OsString]) -> std::process::ExitCode {
+    let ahead = match args {
+        [] => 0,
+        [flag, n] if flag == "--ahead" => match n.to_str().and_then(|n| n.parse().ok()) {
+            Some(n) => n,
+            None => return setup_failed(format!("a bad --ahead: {n:?}")),
+        },
+        _ => return setup_failed(format!("unexpected arguments: {args:?}")),
+    };
+    match crate::runner::sandbox::supervisor::serve(ahead) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => setup_failed(e),
     }

@@ -333,6 +333,7 @@ fn spawn_warm(
     let sandbox_error = LaunchError::Sandbox;
     let pipes = Pipes::new().map_err(|e| sandbox_error(format!("pipe: {e}")))?;
     let request = supervisor::Request {
+        cgroup_files: 0,
         scratch_bytes: launch.scratch_bytes,
         jail: jail_args(launch, words, uid.as_ref(), true)
             .to_args()
@@ -349,7 +350,7 @@ fn spawn_warm(
         full,
         key,
         launch.memory_limit_bytes,
-        launch.process_limit.map(|n| n + warm::WARM_PROCESSES),
+        launch.process_limit.map(|n| n + warm::MATCH_PROCESSES),
         &request,
         launch.dir,
         warm::MatchStdio {
@@ -416,10 +417,12 @@ fn set_limits(pid: u32, per_process: Option<(u64, Option<u64>)>) {
 
 /// `program` found on the `PATH` the bot gets, when it is a bare name: the process can
 /// then start with posix_spawn (which the standard library uses only for a path when
-/// the child's `PATH` differs from ours). Unchanged when it is not found.
-fn on_path(program: &str) -> std::ffi::OsString {
+/// the child's `PATH` differs from ours). Past a version manager's shim (pyenv's, or a
+/// rustup proxy), the program the shim would run, as the sandbox runs it
+/// ([`super::sandbox::real_program`]), and `true`. Unchanged when it is not found.
+fn on_path(program: &str) -> (std::ffi::OsString, bool) {
     if program.contains('/') {
-        return program.into();
+        return (program.into(), false);
     }
     let found = std::env::var_os("PATH").and_then(|path| {
         std::env::split_paths(&path)
@@ -431,15 +434,27 @@ fn on_path(program: &str) -> std::ffi::OsString {
                     .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
             })
     });
-    found.map_or_else(|| program.into(), PathBuf::into_os_string)
+    match found {
+        None => (program.into(), false),
+        Some(found) => {
+            let real = super::sandbox::real_program(&found, program);
+            let past_shim = real != found;
+            (real.into_os_string(), past_shim)
+        }
+    }
 }
 
 fn direct(launch: &Launch<'_>, words: &[String]) -> Command {
-    let mut cmd = Command::new(on_path(&words[0]));
-    cmd.arg0(&words[0])
-        .args(&words[1..])
-        .current_dir(launch.dir)
-        .env_clear();
+    let (program, past_shim) = on_path(&words[0]);
+    let mut cmd = Command::new(&program);
+    // A shim's program is started by its own path, as the shim starts it (an
+    // interpreter finds its installation from it).
+    if past_shim {
+        cmd.arg0(&program);
+    } else {
+        cmd.arg0(&words[0]);
+    }
+    cmd.args(&words[1..]).current_dir(launch.dir).env_clear();
     for key in PASSED_ENV {
         if let Some(value) = std::env::var_os(key) {
             cmd.env(key, value);
@@ -616,10 +631,13 @@ mod tests {
 
     #[tokio::test]
     async fn a_bare_program_is_found_on_the_path_and_its_limits_are_set() {
-        let sh = on_path("sh");
-        assert!(Path::new(&sh).is_absolute(), "{sh:?}");
-        assert_eq!(on_path("./bot"), "./bot");
-        assert_eq!(on_path("no-such-program-here"), "no-such-program-here");
+        let (sh, past_shim) = on_path("sh");
+        assert!(Path::new(&sh).is_absolute() && !past_shim, "{sh:?}");
+        assert_eq!(on_path("./bot"), ("./bot".into(), false));
+        assert_eq!(
+            on_path("no-such-program-here"),
+            ("no-such-program-here".into(), false)
+        );
 
         // The limits reach the started process (read back from /proc).
         let dir = std::env::temp_dir();

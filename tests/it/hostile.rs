@@ -668,6 +668,141 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
     );
 }
 
+/// A warm sandbox hands each match parts that no other match had, while the same sandbox
+/// plays them all: its network and mount namespaces, its scratch area's and its bot
+/// folder's mounts (ids the kernel never hands out twice, which the bot reports), and
+/// its cgroup (read from outside while the match plays), which is not the sandbox's own
+/// and is gone once the match is over.
+#[tokio::test]
+async fn a_warm_sandbox_hands_no_namespace_cgroup_or_mount_to_two_matches() {
+    use mazearena::runner::sandbox::Setup;
+    use mazearena::runner::{BotSpec, Limits, run_match};
+    use std::collections::HashSet;
+    let Some(_) = full_sandbox("hostile fresh parts") else {
+        return;
+    };
+    if !nix::unistd::geteuid().is_root() {
+        eprintln!("SKIPPED hostile fresh parts: warm sandboxes are used by a runner that is root");
+        return;
+    }
+    let warm = mazearena::runner::Sandbox::full(
+        Path::new(env!("CARGO_BIN_EXE_mazearena")),
+        &Setup {
+            reuse: true,
+            ..Setup::default()
+        },
+    )
+    .unwrap();
+    let mazearena::runner::Sandbox::Full(full) = &warm else {
+        unreachable!("a full sandbox was asked for")
+    };
+    let limits = Limits {
+        max_steps: 50,
+        process_limit: Some(32),
+        ..Limits::default()
+    };
+    let maze = crate::support::classic(1);
+    const ROUNDS: usize = 5;
+    let mut seen: std::collections::BTreeMap<String, Vec<String>> = Default::default();
+    let mut cgroups: Vec<Vec<String>> = Vec::new();
+    let mut sandboxes = HashSet::new();
+    for round in 0..ROUNDS {
+        let marker = format!("fresh-parts-{}-{round}", std::process::id());
+        let bot = BotSpec::new(
+            format!("python3 identity.py {marker}"),
+            root().join(HOSTILE),
+        );
+        let mut lines: Vec<String> = Vec::new();
+        let r = run_match(&bot, &maze, 0, limits, &warm, |_| {
+            if lines.is_empty() {
+                for pid in processes_matching(&marker) {
+                    let text =
+                        std::fs::read_to_string(format!("/proc/{pid}/cgroup")).unwrap_or_default();
+                    lines.extend(
+                        text.lines()
+                            // The hierarchies a match's limits and counter are in (v1),
+                            // or the one hierarchy (v2); not the ones left at the root.
+                            .filter(|l| {
+                                let controllers = l.split(':').nth(1).unwrap_or("");
+                                let path = l.splitn(3, ':').nth(2).unwrap_or("/");
+                                path != "/"
+                                    && (controllers.is_empty()
+                                        || ["pids", "memory", "cpuacct"]
+                                            .iter()
+                                            .any(|c| controllers.split(',').any(|x| x == *c)))
+                            })
+                            .map(str::to_string),
+                    );
+                }
+            }
+        })
+        .await;
+        let log = &r.stderr_tail;
+        for kind in ["net", "mounts", "scratch", "folder"] {
+            let id = log
+                .split(&format!("HOSTILE INFO {kind}="))
+                .nth(1)
+                .and_then(|s| s.split_whitespace().next())
+                .unwrap_or_else(|| panic!("round {round}: no {kind} id:\n{log}"));
+            assert!(
+                id.parse::<u64>().is_ok(),
+                "round {round}: {kind}={id}\n{log}"
+            );
+            seen.entry(kind.to_string())
+                .or_default()
+                .push(id.to_string());
+        }
+        assert!(
+            !lines.is_empty(),
+            "round {round}: the bot's cgroup was not seen"
+        );
+        cgroups.push(lines);
+        sandboxes.extend(full.warm.idle_pids());
+    }
+    assert_eq!(sandboxes.len(), 1, "one warm sandbox played every match");
+    for (kind, ids) in &seen {
+        let distinct: HashSet<_> = ids.iter().collect();
+        assert_eq!(
+            distinct.len(),
+            ROUNDS,
+            "a {kind} handed to two matches: {ids:?}"
+        );
+    }
+    let distinct: HashSet<_> = cgroups.iter().flatten().collect();
+    assert_eq!(
+        distinct.len(),
+        cgroups.iter().map(Vec::len).sum::<usize>(),
+        "a cgroup handed to two matches: {cgroups:?}"
+    );
+    // Not the sandbox's own cgroup, whose processes the match never joins.
+    let outer = *sandboxes.iter().next().unwrap();
+    let own = std::fs::read_to_string(format!("/proc/{outer}/cgroup")).unwrap();
+    for line in cgroups.iter().flatten() {
+        assert!(
+            !own.lines().any(|l| l == line),
+            "the sandbox's own cgroup: {line}"
+        );
+    }
+    // Each used cgroup is removed once its match is over (off the match's path).
+    let gone = |line: &str| {
+        let mut parts = line.splitn(3, ':');
+        let (_, controllers, path) = (parts.next(), parts.next().unwrap(), parts.next().unwrap());
+        let base = match controllers {
+            "" => "/sys/fs/cgroup".to_string(),
+            c => format!("/sys/fs/cgroup/{}", c.split(',').next().unwrap()),
+        };
+        !Path::new(&format!("{base}{path}")).exists()
+    };
+    let until = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    while !cgroups.iter().flatten().all(|l| gone(l)) {
+        assert!(
+            std::time::Instant::now() < until,
+            "a used cgroup is still there: {cgroups:?}"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+}
+
 /// A bot folder of 1,500 entries with names of 200 bytes plays in a warm sandbox like any
 /// other: its names never travel to the sandbox (the match's init lists the folder,
 /// behind the walls), so no request grows with them.

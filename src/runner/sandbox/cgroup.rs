@@ -190,7 +190,22 @@ impl CgroupRoot {
             std::process::id(),
             NEXT.fetch_add(1, Ordering::Relaxed)
         );
-        self.build(&name, limits, false)
+        self.build(&name, limits, false, true)
+    }
+
+    /// Makes a cgroup as [`CgroupRoot::create`] does, but with no hold on the CPU
+    /// (`limits.core` is not read): a warm sandbox's own, for its supervisor, whose
+    /// matches each have a cgroup of their own held to their core.
+    ///
+    /// # Errors
+    /// The file system errors of making or configuring it.
+    pub fn create_unheld(&self, limits: CgroupLimits) -> std::io::Result<MatchCgroup> {
+        let name = format!(
+            "m-{}-{}",
+            std::process::id(),
+            NEXT.fetch_add(1, Ordering::Relaxed)
+        );
+        self.build(&name, limits, false, false)
     }
 
     /// The cgroup of a one-shot match (`mazearena run`, or a match that cannot be
@@ -213,7 +228,7 @@ impl CgroupRoot {
             let Some(lock) = self.lock_kept(&name) else {
                 continue;
             };
-            if let Ok(mut group) = self.build(&name, limits, true) {
+            if let Ok(mut group) = self.build(&name, limits, true, true) {
                 group.kept = Some(lock);
                 return Ok(group);
             }
@@ -245,8 +260,15 @@ impl CgroupRoot {
 
     /// Makes the cgroup `name` with `limits`; with `reuse`, takes up the folders of a
     /// kept cgroup that stand (emptied first, and refused while it still counts a
-    /// process), else replaces a stale one. On an error, what was made is removed.
-    fn build(&self, name: &str, limits: CgroupLimits, reuse: bool) -> std::io::Result<MatchCgroup> {
+    /// process), else replaces a stale one; with `hold`, holds it to one core. On an
+    /// error, what was made is removed.
+    fn build(
+        &self,
+        name: &str,
+        limits: CgroupLimits,
+        reuse: bool,
+        hold: bool,
+    ) -> std::io::Result<MatchCgroup> {
         let mut group = MatchCgroup {
             dirs: Vec::new(),
             version: self.clone(),
@@ -275,12 +297,15 @@ impl CgroupRoot {
                 let acct = group.make(&cpuacct.join(name))?;
                 group.cpu_usage = acct.join("cpuacct.usage");
                 let pin = match (limits.core, cpuset) {
-                    (Some(core), Some(cpuset)) => Some((group.make(&cpuset.join(name))?, core)),
+                    (Some(core), Some(cpuset)) if hold => {
+                        Some((group.make(&cpuset.join(name))?, core))
+                    }
                     _ => None,
                 };
                 // Unpinned, a quota of one core: in the cpu controller's own folder, or
                 // in cpuacct's where the two are mounted together.
                 let quota = match (&pin, cpu) {
+                    _ if !hold => None,
                     (None, Some(cpu)) if cpu != cpuacct => Some(group.make(&cpu.join(name))?),
                     (None, Some(_)) => Some(acct),
                     _ => None,
@@ -292,7 +317,7 @@ impl CgroupRoot {
                 group.memory = dir.clone();
                 group.pids = dir.clone();
                 group.cpu_usage = dir.join("cpu.stat");
-                (limits.core.map(|core| (dir, core)), None)
+                (limits.core.filter(|_| hold).map(|core| (dir, core)), None)
             }
         };
         if reuse {
@@ -310,7 +335,9 @@ impl CgroupRoot {
             }
         }
         group.limit(limits.memory_bytes, limits.pids)?;
-        group.hold_to_one_core(pin, quota)?;
+        if hold {
+            group.hold_to_one_core(pin, quota)?;
+        }
         group.cpu_counter = super::proctree::OpenCounter::open(&group.cpu_usage);
         if reuse {
             group.mark();
@@ -801,15 +828,15 @@ mod tests {
         let dir = tmp.path().join("run-0");
         // Unpinned first: a quota of one core. (Each is forgotten, not dropped: a
         // dropped one, not held as kept, would be removed.)
-        std::mem::forget(root.build("run-0", limits(None), true).unwrap());
+        std::mem::forget(root.build("run-0", limits(None), true, true).unwrap());
         assert_eq!(read(&dir, "cpu.max"), "100000 100000");
         // Then pinned: its core, and no quota left.
-        std::mem::forget(root.build("run-0", limits(Some(1)), true).unwrap());
+        std::mem::forget(root.build("run-0", limits(Some(1)), true, true).unwrap());
         assert_eq!(read(&dir, "cpuset.cpus"), "1");
         assert_eq!(read(&dir, "cpu.max"), "max 100000");
         assert_eq!(read(&dir, "pids.max"), "8");
         // Then unpinned again: the parent's cores, and the quota.
-        std::mem::forget(root.build("run-0", limits(None), true).unwrap());
+        std::mem::forget(root.build("run-0", limits(None), true, true).unwrap());
         assert_eq!(read(&dir, "cpuset.cpus"), "");
         assert_eq!(read(&dir, "cpu.max"), "100000 100000");
     }
@@ -833,9 +860,9 @@ mod tests {
             cpuset: Some(cpuset.clone()),
         };
         let dir = acct.join("run-0");
-        std::mem::forget(root.build("run-0", limits(None), true).unwrap());
+        std::mem::forget(root.build("run-0", limits(None), true, true).unwrap());
         assert_eq!(read(&dir, "cpu.cfs_quota_us"), "100000");
-        std::mem::forget(root.build("run-0", limits(Some(1)), true).unwrap());
+        std::mem::forget(root.build("run-0", limits(Some(1)), true, true).unwrap());
         assert_eq!(read(&dir, "cpu.cfs_quota_us"), "-1");
         assert_eq!(read(&cpuset.join("run-0"), "cpuset.cpus"), "1");
         assert_eq!(read(&cpuset.join("run-0"), "cpuset.mems"), "0");
@@ -857,7 +884,7 @@ mod tests {
             cpu: Some(cpu.clone()),
             cpuset: None,
         };
-        std::mem::forget(root.build("run-0", limits(Some(1)), true).unwrap());
+        std::mem::forget(root.build("run-0", limits(Some(1)), true, true).unwrap());
         assert_eq!(read(&cpu.join("run-0"), "cpu.cfs_period_us"), "100000");
         assert_eq!(read(&cpu.join("run-0"), "cpu.cfs_quota_us"), "100000");
         assert_eq!(

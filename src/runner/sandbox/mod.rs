@@ -18,8 +18,10 @@
 //!
 //! [`Sandbox::None`] runs the bot directly as the server's user: only for bots you trust.
 
+pub mod ahead;
 pub mod cgroup;
 pub mod enter;
+pub mod fresh;
 pub mod jail;
 pub mod proctree;
 pub mod seccomp;
@@ -110,6 +112,9 @@ pub struct FullSandbox {
     pub hide: Vec<PathBuf>,
     /// Whether matches may reuse warm sandboxes ([`warm`]): a runner of many matches.
     pub reuse: bool,
+    /// Network namespaces each warm sandbox makes ahead of its matches
+    /// ([`fresh::FreshPool`]).
+    pub ahead: usize,
     /// The idle warm sandboxes.
     pub warm: warm::WarmPool,
     /// The runtimes found so far by program and bot folder (with `detect`).
@@ -121,7 +126,7 @@ type DetectedRuntimes =
     std::sync::Mutex<std::collections::HashMap<(String, PathBuf), Vec<Runtime>>>;
 
 /// What the full sandbox is set up with.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Setup {
     /// Paths that must never be visible to a bot (data folder, database).
     pub hide: Vec<PathBuf>,
@@ -132,6 +137,23 @@ pub struct Setup {
     /// Keep warm sandboxes for the next matches ([`warm`]): servers, workers and
     /// tournaments, which play many.
     pub reuse: bool,
+    /// Network namespaces each warm sandbox makes ahead of its matches
+    /// ([`fresh::FreshPool`]; 0: each match's is made as it starts).
+    pub ahead: usize,
+}
+
+impl Default for Setup {
+    /// Nothing hidden, no runtimes, no detection, no warm sandboxes, one network
+    /// namespace made ahead.
+    fn default() -> Setup {
+        Setup {
+            hide: Vec::new(),
+            runtimes: Vec::new(),
+            detect: false,
+            reuse: false,
+            ahead: 1,
+        }
+    }
 }
 
 impl FullSandbox {
@@ -306,6 +328,7 @@ impl Sandbox {
             detect: setup.detect,
             hide: setup.hide.clone(),
             reuse: setup.reuse,
+            ahead: setup.ahead,
             warm: warm::WarmPool::default(),
             detected: DetectedRuntimes::default(),
         };
@@ -502,7 +525,7 @@ pub fn find_program(name: &str) -> Option<PathBuf> {
 }
 
 pub(crate) use view::bwrap_args;
-pub use view::{Runtime, Work, listed_runtimes, runtime_of_program};
+pub use view::{Runtime, Work, listed_runtimes, real_program, runtime_of_program};
 
 impl FullSandbox {
     /// The runtimes mounted for a bot or build whose program is `program`: the

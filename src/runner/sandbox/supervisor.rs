@@ -23,14 +23,19 @@ use std::path::Path;
 
 use nix::sys::socket::{ControlMessage, ControlMessageOwned, MsgFlags, recvmsg, sendmsg};
 
+use super::fresh::{Fresh, FreshPool, Leftovers};
 use super::jail::{self, SCRATCH};
 use super::view::BOT_FILES;
 
 /// The largest message either side sends (a bot's command line and variables).
 pub const MAX_MESSAGE: usize = 256 * 1024;
 
-/// The descriptors a [`Request`] carries, in order.
+/// The descriptors every [`Request`] carries first, in order: the bot's stdin, stdout
+/// and stderr, and its folder.
 pub const REQUEST_FDS: usize = 4;
+
+/// The most cgroup files a [`Request`] carries after them.
+pub const MAX_CGROUP_FILES: usize = 8;
 
 /// One match, as the runner asks for it.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -39,6 +44,10 @@ pub struct Request {
     pub scratch_bytes: u64,
     /// The jail step's arguments ([`jail::JailArgs::to_args`]).
     pub jail: Vec<String>,
+    /// How many descriptors follow the first [`REQUEST_FDS`]: the match's own cgroup's
+    /// files the init writes `0` to, to move itself in (opened for writing by the
+    /// runner, whose rights the kernel checks), one per hierarchy.
+    pub cgroup_files: usize,
 }
 
 /// What the supervisor answers.
@@ -83,7 +92,7 @@ pub fn recv(
     socket: BorrowedFd<'_>,
     buf: &mut [u8],
 ) -> std::io::Result<Option<(usize, Vec<OwnedFd>)>> {
-    let mut space = nix::cmsg_space!([RawFd; REQUEST_FDS]);
+    let mut space = nix::cmsg_space!([RawFd; REQUEST_FDS + MAX_CGROUP_FILES]);
     let mut iov = [std::io::IoSliceMut::new(buf)];
     let msg = recvmsg::<()>(
         socket.as_raw_fd(),
@@ -124,12 +133,14 @@ fn reply(socket: BorrowedFd<'_>, reply: &Reply, fds: &[RawFd]) -> std::io::Resul
     send(socket, &bytes, fds)
 }
 
-/// Serves matches on standard input until the runner closes it. Returns only on a
-/// failure, with the reason (when the runner has gone: `Ok`).
+/// Serves matches on standard input until the runner closes it, with `ahead` matches'
+/// network namespaces and empty layers made before the matches that take them
+/// ([`FreshPool`]; with 0, each match's init makes its own). Returns only on a failure,
+/// with the reason (when the runner has gone: `Ok`).
 ///
 /// # Errors
 /// The reason it stopped.
-pub fn serve() -> Result<(), String> {
+pub fn serve(ahead: usize) -> Result<(), String> {
     // SAFETY: descriptor 0 is the control socket for this process's whole life.
     let control = unsafe { BorrowedFd::borrow_raw(0) };
     if std::fs::read_dir("/proc/self/task").map_or(0, Iterator::count) != 1 {
@@ -141,6 +152,17 @@ pub fn serve() -> Result<(), String> {
     let own = super::seccomp::helper_filter().map_err(|e| format!("seccomp: {e}"))?;
     seccompiler::apply_filter(&own).map_err(|e| format!("seccomp: {e}"))?;
     let filters = super::seccomp::match_filters().map_err(|e| format!("seccomp: {e}"))?;
+    // The runner's program is no match's: gone from this mount namespace, it is in no
+    // match's copy of it (and its host path in no match's mount table).
+    nix::mount::umount2(super::HELPER_IN_SANDBOX, nix::mount::MntFlags::MNT_DETACH)
+        .map_err(|e| format!("leaving out the runner's program: {e}"))?;
+    // The runner's thread is held to its match's core, and so was this process from
+    // its start: it may run on any core (each match's init joins its match's cgroup,
+    // which holds it to the match's core), so what it makes between matches need not
+    // wait for that core.
+    widen_to_every_core();
+    let mut pool = FreshPool::new(ahead)?;
+    pool.fill()?;
     reply(control, &Reply::Ready, &[]).map_err(|e| format!("cannot answer: {e}"))?;
     let mut buf = vec![0u8; MAX_MESSAGE];
     loop {
@@ -154,10 +176,18 @@ pub fn serve() -> Result<(), String> {
             .and_then(|r| {
                 let args: Vec<OsString> = r.jail.iter().map(OsString::from).collect();
                 let jail = jail::JailArgs::parse(&args)?;
+                let mut fds = fds;
+                if fds.len() != REQUEST_FDS + r.cgroup_files {
+                    return Err(format!(
+                        "a request needs {} descriptors",
+                        REQUEST_FDS + r.cgroup_files
+                    ));
+                }
+                let cgroup = fds.split_off(REQUEST_FDS);
                 let fds: [OwnedFd; REQUEST_FDS] = fds
                     .try_into()
                     .map_err(|_| format!("a request needs {REQUEST_FDS} descriptors"))?;
-                Ok((r, jail, fds))
+                Ok((r, jail, (fds, cgroup)))
             });
         let (request, jail, fds) = match request {
             Ok(r) => r,
@@ -166,15 +196,30 @@ pub fn serve() -> Result<(), String> {
                 continue;
             }
         };
-        match start(&request, &jail, &filters, fds) {
+        match start(&request, &jail, &filters, fds, &mut pool) {
             Err(e) => reply(control, &Reply::Refused(e), &[]).map_err(|e| e.to_string())?,
-            Ok((pidfd, pid)) => {
+            Ok((pidfd, pid, leftovers)) => {
                 reply(control, &Reply::Started, &[pidfd.as_raw_fd()]).map_err(|e| e.to_string())?;
                 let code = wait_match(control, &pidfd, pid)?;
                 reply(control, &Reply::Ended(code), &[]).map_err(|e| e.to_string())?;
+                // Torn down now that the match's end is told, while the runner records
+                // its result.
+                drop(leftovers);
             }
         }
+        // The next match's parts are made now, not when it asks.
+        pool.fill()?;
     }
+}
+
+/// Lets this process run on every core its cgroup allows.
+fn widen_to_every_core() {
+    use nix::sched::{CpuSet, sched_setaffinity};
+    let mut every = CpuSet::new();
+    for core in 0..CpuSet::count() {
+        let _ = every.set(core);
+    }
+    let _ = sched_setaffinity(nix::unistd::Pid::from_raw(0), &every);
 }
 
 /// Waits for the match's init to end; when the runner closes the socket meanwhile (it
@@ -236,21 +281,30 @@ fn exit_code(status: libc::c_int) -> i32 {
     }
 }
 
-/// Clones the match's init into new PID, mount, IPC and network namespaces: its pidfd
-/// and pid. A network namespace of its own holds every counter and table a bot can move
-/// (`/proc/net/*`, abstract sockets, the loopback's counters): nothing of one match
-/// reaches the next.
+/// Clones the match's init into new PID, mount and IPC namespaces and a fresh network
+/// namespace (one made ahead by `pool`, which the init enters first, or a new one): its
+/// pidfd and pid, and what the supervisor keeps of the match until its end is told
+/// ([`Leftovers`]). A network namespace of its own holds every counter and table a bot
+/// can move (`/proc/net/*`, abstract sockets, the loopback's counters): nothing of one
+/// match reaches the next.
 fn start(
     request: &Request,
     jail: &jail::JailArgs,
     filters: &[seccompiler::BpfProgram],
-    fds: [OwnedFd; REQUEST_FDS],
-) -> Result<(OwnedFd, libc::pid_t), String> {
+    (fds, cgroup): ([OwnedFd; REQUEST_FDS], Vec<OwnedFd>),
+    pool: &mut FreshPool,
+) -> Result<(OwnedFd, libc::pid_t, Leftovers), String> {
+    let fresh = pool.take()?;
     let mut pidfd: libc::c_int = -1;
+    let new_net = if fresh.is_some() {
+        0
+    } else {
+        libc::CLONE_NEWNET
+    };
     let flags = libc::CLONE_NEWPID
         | libc::CLONE_NEWNS
         | libc::CLONE_NEWIPC
-        | libc::CLONE_NEWNET
+        | new_net
         | libc::CLONE_PIDFD
         | libc::SIGCHLD;
     // SAFETY: a clone without a new stack, like fork(2): this process has one thread
@@ -271,14 +325,22 @@ fn start(
             std::io::Error::last_os_error()
         )),
         0 => {
-            let code = match_init(request, jail, filters, fds);
+            // What was made for later matches is not this one's.
+            for fd in pool.held() {
+                // SAFETY: closes, in this child only, descriptors the pool owns.
+                unsafe { libc::close(fd) };
+            }
+            let code = match_init(request, jail, filters, fds, fresh.as_ref(), cgroup);
             // SAFETY: ends the child without running anything of the parent's.
             unsafe { libc::_exit(code) }
         }
         pid => {
-            drop(fds);
+            let [_, _, _, tree] = fds;
+            let leftovers = Leftovers::keep(pid as libc::pid_t, fresh, tree);
+            drop(cgroup);
             // SAFETY: CLONE_PIDFD stored a new descriptor that this process owns.
-            Ok((unsafe { OwnedFd::from_raw_fd(pidfd) }, pid as libc::pid_t))
+            let pidfd = unsafe { OwnedFd::from_raw_fd(pidfd) };
+            Ok((pidfd, pid as libc::pid_t, leftovers))
         }
     }
 }
@@ -294,6 +356,8 @@ fn match_init(
     jail: &jail::JailArgs,
     filters: &[seccompiler::BpfProgram],
     fds: [OwnedFd; REQUEST_FDS],
+    fresh: Option<&Fresh>,
+    cgroup: Vec<OwnedFd>,
 ) -> i32 {
     let [stdin, stdout, stderr, tree] = fds;
     // The runner's socket is not the match's.
@@ -305,9 +369,18 @@ fn match_init(
         say(&stderr, &format!("mazearena sandbox: {e}\n"));
         jail::SETUP_FAILED
     };
-    if let Err(e) = prepare(request, &tree) {
+    if let Some(fresh) = fresh
+        && let Err(e) = fresh.enter()
+    {
         return fail(e);
     }
+    if let Err(e) = prepare(request, &tree, fresh) {
+        return fail(e);
+    }
+    if let Err(e) = join_cgroup(&cgroup) {
+        return fail(e);
+    }
+    drop(cgroup);
     // The match sees its init as `init`, not as the runner's helper.
     name_this_process(b"init");
     drop(tree);
@@ -368,6 +441,32 @@ fn match_init(
     }
 }
 
+/// Moves this process into the match's own cgroup (`0` written to each of its files,
+/// which the runner opened), then makes a cgroup namespace rooted there: the match sees
+/// its cgroup as `/`, and no name of the runner's.
+fn join_cgroup(files: &[OwnedFd]) -> Result<(), String> {
+    if files.is_empty() {
+        return Ok(());
+    }
+    for file in files {
+        // SAFETY: write(2) of a live two-byte buffer to a descriptor we own.
+        if unsafe { libc::write(file.as_raw_fd(), b"0\n".as_ptr().cast(), 2) } != 2 {
+            return Err(format!(
+                "cannot join the match's cgroup: {}",
+                std::io::Error::last_os_error()
+            ));
+        }
+    }
+    // SAFETY: unshare(2) of this (single-threaded) process's cgroup namespace.
+    if unsafe { libc::unshare(libc::CLONE_NEWCGROUP) } != 0 {
+        return Err(format!(
+            "cannot make the match's cgroup namespace: {}",
+            std::io::Error::last_os_error()
+        ));
+    }
+    Ok(())
+}
+
 /// Renames this process as its match sees it in `/proc` (`cmdline` and `comm`):
 /// the command line's memory is overwritten in place, as `setproctitle` does.
 fn name_this_process(name: &[u8]) {
@@ -405,9 +504,10 @@ fn say(fd: &OwnedFd, text: &str) {
 
 /// The match's own world, made in its fresh mount namespace: `/proc` of its PID
 /// namespace (with the parts the one-shot view has read-only kept read-only), the
-/// scratch tmpfs with `tmp/` (1777) and `work/` (0777), and the
-/// bot's folder attached read-only.
-fn prepare(request: &Request, tree: &OwnedFd) -> Result<(), String> {
+/// scratch tmpfs with `tmp/` (1777) and `work/` (0777), and the bot's folder attached
+/// read-only (over the empty layer made ahead, or one made now); when the network
+/// namespace was not made ahead, its loopback up.
+fn prepare(request: &Request, tree: &OwnedFd, fresh: Option<&Fresh>) -> Result<(), String> {
     use nix::mount::{MsFlags, mount};
     let none = None::<&str>;
     let at = |what: &str, e: nix::Error| format!("{what}: {e}");
@@ -443,18 +543,25 @@ fn prepare(request: &Request, tree: &OwnedFd) -> Result<(), String> {
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode))
             .map_err(|e| format!("{}: {e}", path.display()))?;
     }
-    attach_unnamed(tree, BOT_FILES).map_err(|e| format!("attaching the bot's folder: {e}"))?;
-    // The match's init needs no program of the runner's (it is a copy of the
-    // supervisor); gone, its host path is not in the match's mount table either.
-    nix::mount::umount2(super::HELPER_IN_SANDBOX, nix::mount::MntFlags::MNT_DETACH)
-        .map_err(|e| at("leaving out the runner's program", e))?;
-    loopback_up().map_err(|e| format!("bringing up the match's loopback: {e}"))?;
+    let made;
+    let empty = match fresh {
+        Some(fresh) => &fresh.empty,
+        None => {
+            made = empty_layer().map_err(|e| format!("the bot's folder's empty layer: {e}"))?;
+            &made
+        }
+    };
+    attach_unnamed(tree, empty, BOT_FILES)
+        .map_err(|e| format!("attaching the bot's folder: {e}"))?;
+    if fresh.is_none() {
+        loopback_up().map_err(|e| format!("bringing up the match's loopback: {e}"))?;
+    }
     Ok(())
 }
 
 /// Brings up the loopback of the match's own network namespace, as bubblewrap does for
 /// a one-shot sandbox's: a bot may listen on and talk to itself, never beyond.
-fn loopback_up() -> std::io::Result<()> {
+pub(super) fn loopback_up() -> std::io::Result<()> {
     // SAFETY: socket(2) with constant arguments; the descriptor is owned below.
     let fd = unsafe { libc::socket(libc::AF_INET, libc::SOCK_DGRAM | libc::SOCK_CLOEXEC, 0) };
     if fd < 0 {
@@ -597,15 +704,20 @@ fn fs_mount(fs: &OwnedFd, attrs: libc::c_uint) -> std::io::Result<OwnedFd> {
     owned(unsafe { libc::syscall(libc::SYS_fsmount, fs.as_raw_fd(), 0u32, attrs) })
 }
 
+/// A detached, read-only, empty tmpfs: the lower of an overlay's two layers under the
+/// bot's folder ([`attach_unnamed`]).
+pub(super) fn empty_layer() -> std::io::Result<OwnedFd> {
+    fs_mount(&fs_open(c"tmpfs")?, MOUNT_ATTR_RDONLY)
+}
+
 /// Mounts the bot's folder (the detached tree `tree`) read-only at `at` as the upper of
-/// the two lower layers of an overlay whose other layer is an empty tmpfs of its own. A
-/// bind mount's line in the mount table names the folder's path on the host (the
-/// server's data folder and the bundle's hash); an overlay's layers given as detached
-/// trees are shown as `/`.
-fn attach_unnamed(tree: &OwnedFd, at: &str) -> std::io::Result<()> {
-    let empty = fs_mount(&fs_open(c"tmpfs")?, MOUNT_ATTR_RDONLY)?;
+/// the two lower layers of an overlay whose other layer is `empty` ([`empty_layer`],
+/// this match's own). A bind mount's line in the mount table names the folder's path on
+/// the host (the server's data folder and the bundle's hash); an overlay's layers given
+/// as detached trees are shown as `/`.
+fn attach_unnamed(tree: &OwnedFd, empty: &OwnedFd, at: &str) -> std::io::Result<()> {
     let overlay = fs_open(c"overlay")?;
-    for layer in [tree, &empty] {
+    for layer in [tree, empty] {
         fs_config(
             &overlay,
             FSCONFIG_SET_FD,

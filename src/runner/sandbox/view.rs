@@ -300,8 +300,27 @@ pub fn runtime_of_program(
 }
 
 /// Past a pyenv shim or a rustup proxy, the program that it runs: `pyenv which` and
-/// `rustup which` (the runner's own tools, asked about a file that is on its `PATH`).
-fn real_program(found: &Path, name: &str) -> PathBuf {
+/// `rustup which` (the runner's own tools, asked about a file that is on its `PATH`),
+/// asked once a process for each program. A bot is started with the program itself
+/// with or without the sandbox: a shim's own start (a shell script and `pyenv exec`,
+/// some 50 ms) is not in a match's time either way.
+pub fn real_program(found: &Path, name: &str) -> PathBuf {
+    type Known = std::sync::Mutex<std::collections::HashMap<(PathBuf, String), PathBuf>>;
+    static KNOWN: std::sync::OnceLock<Known> = std::sync::OnceLock::new();
+    let known = KNOWN.get_or_init(Default::default);
+    let key = (found.to_path_buf(), name.to_string());
+    if let Some(real) = known.lock().ok().and_then(|k| k.get(&key).cloned()) {
+        return real;
+    }
+    let real = ask_manager(found, name);
+    if let Ok(mut k) = known.lock() {
+        k.insert(key, real.clone());
+    }
+    real
+}
+
+/// [`real_program`], asked of the version manager.
+fn ask_manager(found: &Path, name: &str) -> PathBuf {
     let dir = found.parent().unwrap_or(Path::new("/"));
     let manager = if dir.ends_with("shims") {
         dir.parent().map(|root| root.join("bin/pyenv"))
@@ -618,6 +637,39 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_pyenv_shim_is_passed_to_the_program_it_runs_and_asked_once() {
+        use std::os::unix::fs::PermissionsExt;
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path();
+        let real = root.join("versions/3.11/bin/python3");
+        let asked = root.join("asked");
+        for dir in ["shims", "bin", "versions/3.11/bin"] {
+            std::fs::create_dir_all(root.join(dir)).unwrap();
+        }
+        let script = |path: &Path, text: String| {
+            std::fs::write(path, text).unwrap();
+            std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o755)).unwrap();
+        };
+        script(&root.join("shims/python3"), "#!/bin/sh\nexit 1\n".into());
+        script(&real, "#!/bin/sh\n".into());
+        // `pyenv which python3`, counting its calls.
+        script(
+            &root.join("bin/pyenv"),
+            format!(
+                "#!/bin/sh\necho x >> {}\necho {}\n",
+                asked.display(),
+                real.display()
+            ),
+        );
+        let shim = root.join("shims/python3");
+        assert_eq!(real_program(&shim, "python3"), real);
+        assert_eq!(real_program(&shim, "python3"), real);
+        assert_eq!(std::fs::read_to_string(&asked).unwrap().lines().count(), 1);
+        // A program that is no shim is itself.
+        assert_eq!(real_program(&real, "python3"), real);
+    }
+
+    #[test]
     fn home_folders_dotfile_folders_and_hidden_paths_are_never_runtimes() {
         let tmp = tempfile::tempdir().unwrap();
         let home_like = tmp.path().join("me");
@@ -694,6 +746,7 @@ mod tests {
             detect: false,
             hide: Vec::new(),
             reuse: false,
+            ahead: 1,
             warm: Default::default(),
             detected: Default::default(),
         };

@@ -7,10 +7,13 @@
 //! match gets, from the supervisor, fresh PID, mount, IPC and network namespaces (so no
 //! counter, table or socket name of one match reaches the next) with a fresh `/proc`
 //! and scratch tmpfs, the bot's folder attached read-only, and the same jail step
-//! as a one-shot sandbox. Between matches the runner checks that nothing of the last one
-//! is left: its init has ended and been reaped, and the cgroup holds only the sandbox's
-//! own processes; the cgroup's counters are read as differences from the match's start
-//! ([`MatchCgroup::mark`]). A sandbox that fails a check is thrown away, never reused.
+//! as a one-shot sandbox; and, from the runner, a cgroup of its own with the match's
+//! limits, which its init joins before anything of the bot runs. Network namespaces
+//! and cgroups are made before the matches that take them ([`super::fresh::FreshPool`],
+//! [`super::ahead`]) and removed after; none is handed to two matches. Between matches
+//! the runner checks that nothing of the last one is left: its init has ended and been
+//! reaped, and the sandbox's cgroup holds only the sandbox's own processes. A sandbox
+//! that fails a check is thrown away, never reused.
 //!
 //! Used where it is proven: a server running as root with cgroups (the limits of a match
 //! must hold for every process together), a bot folder shown as one mount with links, no
@@ -23,6 +26,7 @@ use std::process::Stdio;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use super::ahead::CgroupsAhead;
 use super::cgroup::{CgroupLimits, MatchCgroup};
 use super::supervisor::{self, Reply, Request};
 use super::view::{self, Runtime, Work};
@@ -34,9 +38,12 @@ pub fn idle_max() -> usize {
     std::thread::available_parallelism().map_or(8, |n| (2 * n.get()).max(8))
 }
 
-/// A warm sandbox's own processes, counted by its cgroup's process limit on top of the
-/// bot's: bubblewrap's two, the supervisor and the match's init.
+/// A warm sandbox's own processes, its cgroup's process limit: bubblewrap's two, the
+/// supervisor, and a match's init until it moves to its match's cgroup.
 pub const WARM_PROCESSES: u64 = 4;
+
+/// The processes of a match's cgroup that are not the bot's: its init.
+pub const MATCH_PROCESSES: u64 = 1;
 
 /// The view's placeholder scratch area, covered by each match's own.
 const PLACEHOLDER_SCRATCH: u64 = 64 * 1024;
@@ -57,18 +64,25 @@ pub struct WarmKey {
     pub runtimes: Vec<Runtime>,
 }
 
-/// The idle warm sandboxes of a runner.
+/// The idle warm sandboxes of a runner, and the cgroups made for their next matches.
 #[derive(Debug, Default)]
 pub struct WarmPool {
     idle: Mutex<Vec<(WarmKey, WarmSandbox)>>,
     /// Matches started in warm sandboxes so far.
     started: std::sync::atomic::AtomicU64,
+    /// Each match's own cgroup, made ahead and removed after.
+    cgroups: CgroupsAhead,
 }
 
 impl WarmPool {
     /// How many matches were started in warm sandboxes of this pool.
     pub fn matches_started(&self) -> u64 {
         self.started.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// How many cgroups are made and waiting for matches.
+    pub fn cgroups_ahead(&self) -> usize {
+        self.cgroups.fresh()
     }
 
     /// The outer process (bubblewrap's) of each idle sandbox, oldest first.
@@ -121,20 +135,17 @@ pub struct WarmSandbox {
 }
 
 impl WarmSandbox {
-    /// Starts one, in a cgroup with the given limits.
-    fn start(
-        full: &FullSandbox,
-        key: &WarmKey,
-        memory: Option<u64>,
-        pids: Option<u64>,
-    ) -> Result<WarmSandbox, String> {
+    /// Starts one, in a cgroup of its own (its matches' processes are not in it).
+    fn start(full: &FullSandbox, key: &WarmKey) -> Result<WarmSandbox, String> {
         use nix::sys::socket::{AddressFamily, SockFlag, SockType, socketpair};
         let root = full.cgroups.as_ref().map_err(Clone::clone)?;
+        // Its own processes run on any core (the making of the next match's parts is
+        // not held to this match's core); each match's cgroup holds the match to its own.
         let cgroup = root
-            .create(CgroupLimits {
-                memory_bytes: memory,
-                pids,
-                core: key.core,
+            .create_unheld(CgroupLimits {
+                memory_bytes: None,
+                pids: Some(WARM_PROCESSES),
+                core: None,
             })
             .map_err(|e| e.to_string())?;
         let (ours, theirs) = socketpair(
@@ -148,7 +159,12 @@ impl WarmSandbox {
         set_blocking(&theirs).map_err(|e| format!("fcntl: {e}"))?;
         let args = view::bwrap_args(full, None, PLACEHOLDER_SCRATCH, Work::Warm, &key.runtimes)
             .map_err(|e| e.to_string())?;
-        let mut cmd = full.command_step(args, vec![SERVE_SUBCOMMAND.into()], Some(&cgroup));
+        let step = vec![
+            SERVE_SUBCOMMAND.into(),
+            "--ahead".into(),
+            full.ahead.to_string().into(),
+        ];
+        let mut cmd = full.command_step(args, step, Some(&cgroup));
         use std::os::unix::process::CommandExt;
         cmd.stdin(Stdio::from(theirs))
             .stdout(Stdio::null())
@@ -270,13 +286,16 @@ pub struct WarmMatch {
     key: WarmKey,
     sandbox: Option<WarmSandbox>,
     pidfd: OwnedFd,
+    /// The match's own cgroup.
+    cgroup: Option<MatchCgroup>,
     /// The match's init, as this runner sees it.
     pub init_pid: u32,
     ended: Option<i32>,
 }
 
-/// Starts a match in a warm sandbox of `full` for `key` (an idle one, or a new one):
-/// the cgroup gets the match's limits and counts from here.
+/// Starts a match in a warm sandbox of `full` for `key` (an idle one, or a new one), in
+/// a cgroup of its own with the match's limits (`pids`: the bot's processes and the
+/// match's init).
 ///
 /// # Errors
 /// The sandbox could not be started or refused the match, and why.
@@ -291,69 +310,113 @@ pub fn start_match(
 ) -> Result<WarmMatch, String> {
     let tree = detached_read_only(bot_dir)
         .map_err(|e| format!("cannot mount the bot's folder {}: {e}", bot_dir.display()))?;
-    let message = serde_json::to_vec(request).map_err(|e| e.to_string())?;
-    if message.len() > supervisor::MAX_MESSAGE {
-        return Err("the bot's command line and variables are too long".into());
+    let root = full.cgroups.as_ref().map_err(Clone::clone)?;
+    let cgroup = full
+        .warm
+        .cgroups
+        .take(root, key.core)
+        .map_err(|e| format!("the match's cgroup: {e}"))?;
+    let retire = |e: String, cgroup: MatchCgroup| {
+        full.warm.cgroups.retire(cgroup);
+        e
+    };
+    if let Err(e) = cgroup.limit(memory, pids) {
+        return Err(retire(format!("the match's cgroup: {e}"), cgroup));
     }
-    let fds: [RawFd; supervisor::REQUEST_FDS] = [
+    let join: Vec<OwnedFd> = match cgroup
+        .join_files()
+        .iter()
+        .map(|f| {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open(f)
+                .map(OwnedFd::from)
+        })
+        .collect::<std::io::Result<_>>()
+    {
+        Ok(files) => files,
+        Err(e) => return Err(retire(format!("the match's cgroup: {e}"), cgroup)),
+    };
+    let request = Request {
+        cgroup_files: join.len(),
+        ..request.clone()
+    };
+    let message = serde_json::to_vec(&request).map_err(|e| e.to_string())?;
+    if message.len() > supervisor::MAX_MESSAGE {
+        return Err(retire(
+            "the bot's command line and variables are too long".into(),
+            cgroup,
+        ));
+    }
+    let fds: Vec<RawFd> = [
         stdio.stdin.as_raw_fd(),
         stdio.stdout.as_raw_fd(),
         stdio.stderr.as_raw_fd(),
         tree.as_raw_fd(),
-    ];
+    ]
+    .into_iter()
+    .chain(join.iter().map(AsRawFd::as_raw_fd))
+    .collect();
     // An idle sandbox that passed its checks may still be gone by the time the request
     // is sent (its supervisor ended), or may not take the match's limits: then a new one
     // is started, once. A request that was sent is never sent again.
     let mut idle = full.warm.take(&key);
     let sandbox = loop {
         let reused = idle.is_some();
-        let mut sandbox = match idle.take() {
+        let sandbox = match idle.take() {
             Some(s) => s,
-            None => WarmSandbox::start(full, &key, memory, pids)?,
+            None => match WarmSandbox::start(full, &key) {
+                Ok(s) => s,
+                Err(e) => return Err(retire(e, cgroup)),
+            },
         };
-        // A lower memory limit than a reused cgroup holds (the kernel could not reclaim
-        // enough) is no reason to fail the match: a new sandbox is started.
-        match sandbox.cgroup.limit(memory, pids) {
-            Ok(()) => {}
-            Err(_) if reused => continue,
-            Err(e) => return Err(format!("the match's cgroup: {e}")),
-        }
-        sandbox.cgroup.mark();
         match supervisor::send(sandbox.control.as_fd(), &message, &fds) {
             Ok(()) => break sandbox,
             Err(_) if reused => continue,
-            Err(e) => return Err(format!("the warm sandbox's supervisor: {e}")),
+            Err(e) => {
+                return Err(retire(
+                    format!("the warm sandbox's supervisor: {e}"),
+                    cgroup,
+                ));
+            }
         }
     };
-    drop((stdio, tree));
-    match sandbox.answer()? {
+    drop((stdio, tree, join));
+    let answer = match sandbox.answer() {
+        Ok(answer) => answer,
+        Err(e) => return Err(retire(e, cgroup)),
+    };
+    match answer {
         (Reply::Started, mut fds) if fds.len() == 1 => {
             let pidfd = fds.remove(0);
-            let init_pid = pid_of(&pidfd).ok_or("the match's init is not found")?;
-            full.warm
-                .started
-                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            Ok(WarmMatch {
+            let mut warm = WarmMatch {
                 full: full.clone(),
                 key,
                 sandbox: Some(sandbox),
                 pidfd,
-                init_pid,
+                cgroup: Some(cgroup),
+                init_pid: 0,
                 ended: None,
-            })
+            };
+            // Dropped on an error: the match is killed, its cgroup removed.
+            warm.init_pid = pid_of(&warm.pidfd).ok_or("the match's init is not found")?;
+            full.warm
+                .started
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Ok(warm)
         }
         (Reply::Refused(reason), _) => {
             full.warm.put(key, sandbox);
-            Err(reason)
+            Err(retire(reason, cgroup))
         }
-        (other, _) => Err(format!("the supervisor said {other:?}")),
+        (other, _) => Err(retire(format!("the supervisor said {other:?}"), cgroup)),
     }
 }
 
 impl WarmMatch {
-    /// The match's cgroup (the sandbox's, counting from the match's start).
+    /// The match's own cgroup.
     pub fn cgroup(&self) -> Option<&MatchCgroup> {
-        self.sandbox.as_ref().map(|s| &s.cgroup)
+        self.cgroup.as_ref()
     }
 
     /// Kills the match: its init, and with it its whole PID namespace.
@@ -404,6 +467,10 @@ impl WarmMatch {
 impl Drop for WarmMatch {
     fn drop(&mut self) {
         self.kill();
+        // Emptied and removed by the pool's thread, off the match's path.
+        if let Some(cgroup) = self.cgroup.take() {
+            self.full.warm.cgroups.retire(cgroup);
+        }
         if let Some(mut sandbox) = self.sandbox.take() {
             sandbox.awaiting_end = self.ended.is_none();
             self.full.warm.put(self.key.clone(), sandbox);
@@ -526,6 +593,7 @@ mod tests {
             detect: false,
             hide: Vec::new(),
             reuse,
+            ahead: 1,
             warm: WarmPool::default(),
             detected: Default::default(),
         }
