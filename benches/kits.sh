@@ -2,7 +2,10 @@
 # Matches a minute per worker core, by the bot's language: the starter kits' bots
 # (bots/python: 4 bots, bots/c: 2, bots/java: 1) in a local tournament with `--jobs 1`
 # (one core) on the first N playable contest mazes of ../shared/mazes/micromouseonline/classic, in
-# the full sandbox and, as the baseline, without it. A run's wall time holds the kit's
+# the full sandbox (its warm sandboxes making each match's network namespace ahead, as
+# they do by default), in the full sandbox making it on each match's start
+# (MAZEARENA_SANDBOX_AHEAD=0: the pool off) and, as the baseline, without the sandbox.
+# A run's wall time holds the kit's
 # build and the start; a one-maze run of the same kit, taken in the same round, is
 # subtracted, so a match's time is (T(N mazes) - T(1 maze)) / ((N - 1) x bots): what a
 # worker's slot spends on each further match. The settings are taken in turn RUNS times;
@@ -25,13 +28,14 @@ for f in $(ls ../shared/mazes/micromouseonline/classic/*.txt | sort); do
 done
 KITS=(python c java)
 
-run() { # $1: kit, $2: sandbox, $3...: mazes; prints "ms matches"
-  local kit=$1 sandbox=$2 db=$tmp/t.db a b out
+run() { # $1: kit, $2: setting (full, pooloff, none), $3...: mazes; prints "ms matches"
+  local kit=$1 setting=$2 db=$tmp/t.db a b out sandbox=$2 ahead=1
   shift 2
+  [ "$setting" = pooloff ] && sandbox=full ahead=0
   rm -f "$db"*
   a=$(date +%s%N)
-  out=$(./target/release/mazearena tournament --bots "bots/$kit" --mazes "$@" --jobs 1 \
-    --sandbox "$sandbox" --database "sqlite://$db" --json)
+  out=$(MAZEARENA_SANDBOX_AHEAD=$ahead ./target/release/mazearena tournament --bots "bots/$kit" \
+    --mazes "$@" --jobs 1 --sandbox "$sandbox" --database "sqlite://$db" --json)
   b=$(date +%s%N)
   echo "$(( (b - a) / 1000000 )) $(python3 -c 'import json, sys; d = json.load(sys.stdin); print(len(d["matches"]))' <<<"$out")"
 }
@@ -39,7 +43,7 @@ run() { # $1: kit, $2: sandbox, $3...: mazes; prints "ms matches"
 declare -A PER
 for ((i = 1; i <= RUNS; i++)); do
   for kit in "${KITS[@]}"; do
-    for sandbox in full none; do
+    for sandbox in full pooloff none; do
       read -r t1 n1 < <(run "$kit" "$sandbox" "${files[0]}")
       read -r tn nn < <(run "$kit" "$sandbox" "${files[@]}")
       per=$(python3 -c "print(($tn - $t1) / ($nn - $n1))")
@@ -55,18 +59,22 @@ echo
 echo "\`bash benches/kits.sh $RUNS $MAZES\`: the starter kits' bots (bots/python: 4 bots, bots/c: 2,"
 echo "bots/java: 1) in a local tournament with \`--jobs 1\` (one core) on the first $MAZES playable contest mazes"
 echo "of ../shared/mazes/micromouseonline/classic; a match's time is (T($MAZES mazes) - T(1 maze)) /"
-echo "(matches more), so the kit's build and the start are not in it; beside it, the same without the"
-echo "sandbox (the baseline), taken in turn; medians of $RUNS rounds."
+echo "(matches more), so the kit's build and the start are not in it; in the full sandbox (each"
+echo "match's network namespace made ahead: the default), in it with the pool off"
+echo "(\`MAZEARENA_SANDBOX_AHEAD=0\`: made on each match's start), and without the sandbox (the"
+echo "baseline), taken in turn; medians of $RUNS rounds. \"x\" is the throughput beside the baseline's."
 echo
-python3 - "$RUNS" "${PER[python-full]}" "${PER[python-none]}" "${PER[c-full]}" "${PER[c-none]}" \
-  "${PER[java-full]}" "${PER[java-none]}" "$N_python" "$N_c" "$N_java" <<'PY'
+python3 - "$RUNS" "$N_python" "$N_c" "$N_java" \
+  "${PER[python-full]}" "${PER[python-pooloff]}" "${PER[python-none]}" \
+  "${PER[c-full]}" "${PER[c-pooloff]}" "${PER[c-none]}" \
+  "${PER[java-full]}" "${PER[java-pooloff]}" "${PER[java-none]}" <<'PY'
 import statistics, sys
 med = lambda s: statistics.median(float(x) for x in s.split())
-rows = [("Python", sys.argv[2], sys.argv[3], sys.argv[8]), ("C", sys.argv[4], sys.argv[5], sys.argv[9]),
-        ("Java", sys.argv[6], sys.argv[7], sys.argv[10])]
-print("| kit | matches a run | ms a match, full sandbox | matches a minute per core | ms a match, no sandbox (baseline) | matches a minute per core, no sandbox |")
-print("|---|---:|---:|---:|---:|---:|")
-for name, full, none, n in rows:
-    f, b = med(full), med(none)
-    print(f"| {name} | {n} | {f:.1f} | {60000 / f:,.0f} | {b:.1f} | {60000 / b:,.0f} |")
+a = sys.argv
+rows = [("Python", a[2], a[5:8]), ("C", a[3], a[8:11]), ("Java", a[4], a[11:14])]
+print("| kit | matches a run | ms a match, sandbox | x | ms a match, sandbox, pool off | x | ms a match, no sandbox (baseline) | matches a minute per core: sandbox / no sandbox |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|")
+for name, n, (full, off, none) in rows:
+    f, o, b = med(full), med(off), med(none)
+    print(f"| {name} | {n} | {f:.1f} | {b / f:.2f} | {o:.1f} | {b / o:.2f} | {b:.1f} | {60000 / f:,.0f} / {60000 / b:,.0f} |")
 PY

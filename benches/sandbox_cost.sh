@@ -17,23 +17,25 @@
 #      exit       the bot's exit to bubblewrap's (the sandbox's processes end)
 #      teardown   bubblewrap's exit to the runner's (cgroups removed, the record written)
 # 3. A small tournament: the C starter kit's two bots (bots/c, built with make) on the
-#    first 120 contest mazes (240 matches), `--jobs 2`, with and without the sandbox, in
-#    turn 3 times: wall time and the CPU the whole machine was busy (/proc/stat: the
-#    kernel's own work for the sandbox, e.g. a network namespace's clean-up, is done by
-#    kernel threads outside the match's processes).
+#    first 120 contest mazes (240 matches), `--jobs 2`, with and without the sandbox, and
+#    in the sandbox with the pool off (MAZEARENA_SANDBOX_AHEAD=0: each match's network
+#    namespace made on its start), in turn 5 times: wall time and the CPU the whole
+#    machine was busy (/proc/stat: the kernel's own work for the sandbox, e.g. a network
+#    namespace's clean-up, is done by kernel threads outside the match's processes).
 #
 # 4. A warm sandbox's cost per match (what servers, workers and tournaments pay, as root
 #    with cgroups): the same 100-step match in a `tournament` of one slot (`--jobs 1`),
-#    repeated 10 and 100 times, with and without the sandbox, in turn RUNS times; a
-#    match's cost is (100 repeats - 10 repeats) / 90 of each, so the tournament's own
-#    start (and the sandbox's first start and test) is not in it.
+#    repeated 10 and 100 times, with and without the sandbox (and with the pool off), in
+#    turn RUNS times; a match's cost is (100 repeats - 10 repeats) / 90 of each, so the
+#    tournament's own start (and the sandbox's first start and test) is not in it.
 # 5. The floor of a one-shot sandbox: bubblewrap making the same namespaces (PID,
 #    network, IPC, UTS, mount) with only /usr in the view and running /usr/bin/true,
 #    against /usr/bin/true alone, in turn (medians of the paired differences).
 # 6. The floor of a warm match: benches/warm_floor.c starts /usr/bin/true 500 times
-#    plainly and 500 times in a world of its own with the warm sandbox's mounts and
-#    walls (and nothing of mazearena's), in turn RUNS times: what the kernel's own work
-#    for a warm match's isolation costs, beside what the C kit's tournament allows.
+#    plainly, 500 times in a world of its own with the warm sandbox's mounts and walls
+#    (and nothing of mazearena's), and 500 times in the same with a network namespace of
+#    its own, in turn RUNS times: what the kernel's own work for a warm match's isolation
+#    costs, beside what the C kit's tournament allows.
 #
 # With BASELINE=path/to/an/earlier/mazearena, each sandboxed measure is also taken with it,
 # in turn with the others (its stages too).
@@ -90,31 +92,32 @@ mkdir "$tmp/mazes"
 for f in $(ls ../shared/mazes/micromouseonline/classic | head -120); do
   ln -s "$PWD/../shared/mazes/micromouseonline/classic/$f" "$tmp/mazes/$f"
 done
-tournament() { # $1: sandbox, $2: binary -> "wall_ms busy_ms matches"
+tournament() { # $1: sandbox, $2: binary, $3: networks made ahead -> "wall_ms busy_ms matches"
   local a b s0 s1 busy
   rm -f "$tmp"/t.db*
   s0=($(head -1 /proc/stat))
   a=$(date +%s%N)
-  "$2" tournament --bots bots/c --mazes "$tmp/mazes" --jobs 2 --sandbox "$1" \
+  MAZEARENA_SANDBOX_AHEAD=${3:-1} "$2" tournament --bots bots/c --mazes "$tmp/mazes" --jobs 2 --sandbox "$1" \
     --database "sqlite://$tmp/t.db" --json >"$tmp/t.json" 2>/dev/null
   b=$(date +%s%N)
   s1=($(head -1 /proc/stat))
   busy=$(( (s1[1] + s1[2] + s1[3] + s1[6] + s1[7]) - (s0[1] + s0[2] + s0[3] + s0[6] + s0[7]) ))
   echo "$(( (b - a) / 1000000 )) $(( busy * 1000 / $(getconf CLK_TCK) )) $(python3 -c 'import json,sys; print(len(json.load(open(sys.argv[1]))["matches"]))' "$tmp/t.json")"
 }
-for i in 1 2 3; do
+for i in 1 2 3 4 5; do
   echo "none $(tournament none "$bin")"
   echo "full $(tournament full "$bin")"
+  echo "pooloff $(tournament full "$bin" 0)"
   [ -z "$BASELINE" ] || echo "before $(tournament full "$BASELINE")"
 done >"$tmp/tournament.txt"
 
 # A warm sandbox's cost per match: one slot, 10 and 100 repeats of the 100-step match.
 printf 'name = "trivial"\ncommand = "./trivial_bot script.txt %s"\n' "$IDLE" >"$tmp/bot/bot.toml"
-repeats() { # $1: sandbox, $2: repeats -> wall µs
+repeats() { # $1: sandbox, $2: repeats, $3: networks made ahead -> wall µs
   local a b
   rm -f "$tmp"/w.db*
   a=$(date +%s%N)
-  "$bin" tournament --bots "$tmp/bot/bot.toml" --mazes "$maze" --repeats "$2" --jobs 1 \
+  MAZEARENA_SANDBOX_AHEAD=${3:-1} "$bin" tournament --bots "$tmp/bot/bot.toml" --mazes "$maze" --repeats "$2" --jobs 1 \
     --sandbox "$1" --database "sqlite://$tmp/w.db" >"$tmp/w.out" 2>&1
   b=$(date +%s%N)
   grep -q "^$2/$2 matches" "$tmp/w.out" || { cat "$tmp/w.out" >&2; exit 1; }
@@ -122,7 +125,8 @@ repeats() { # $1: sandbox, $2: repeats -> wall µs
 }
 for i in $(seq "$RUNS"); do
   n10=$(repeats none 10) n100=$(repeats none 100) f10=$(repeats full 10) f100=$(repeats full 100)
-  echo "$n10 $n100 $f10 $f100"
+  o10=$(repeats full 10 0) o100=$(repeats full 100 0)
+  echo "$n10 $n100 $f10 $f100 $o10 $o100"
 done >"$tmp/warm.txt"
 # The one-shot floor: bubblewrap's namespaces around /usr/bin/true.
 floor_ns=(--unshare-pid --unshare-net --unshare-ipc --unshare-uts --ro-bind /usr /usr)
@@ -141,7 +145,7 @@ gcc -O2 -o "$tmp/warm_floor" benches/warm_floor.c
 mkdir "$tmp/wf"
 chmod 755 "$tmp" "$tmp/wf"
 for i in $(seq "$RUNS"); do
-  echo "$("$tmp/warm_floor" plain 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true) $("$tmp/warm_floor" isolated 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true)"
+  echo "$("$tmp/warm_floor" plain 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true) $("$tmp/warm_floor" isolated 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true) $("$tmp/warm_floor" isolated-net 500 "$tmp/wf" "$PWD/bots/c" /usr/bin/true)"
 done >"$tmp/warm_floor.txt"
 
 python3 - "$tmp" "$RUNS" "$BASELINE" <<'PY'
@@ -219,7 +223,7 @@ for line in open(f"{tmp}/tournament.txt"):
 print(f"| tournament: C kit, 240 matches, `--jobs 2` ({len(t['none'])} runs each, in turn, medians) | wall (s) | matches/s | × without the sandbox | machine busy (CPU s) |")
 print("|---|---:|---:|---:|---:|")
 base = med(r[0] for r in t["none"])
-names = {"none": "`--sandbox none`", "full": "`--sandbox full`", "before": "`--sandbox full`, the baseline binary"}
+names = {"none": "`--sandbox none`", "full": "`--sandbox full`", "pooloff": "`--sandbox full`, the pool off (`MAZEARENA_SANDBOX_AHEAD=0`)", "before": "`--sandbox full`, the baseline binary"}
 for k in t:
     wall = med(r[0] for r in t[k])
     n = t[k][0][2]
@@ -227,27 +231,34 @@ for k in t:
 print()
 warm = [tuple(int(x) for x in l.split()) for l in open(f"{tmp}/warm.txt")]
 per = lambda a, b: [(w[b] - w[a]) / 90 for w in warm]
-n_match, f_match = per(0, 1), per(2, 3)
+n_match, f_match, o_match = per(0, 1), per(2, 3), per(4, 5)
 print(f"| a warm sandbox: the 100-step match in a one-slot tournament, (100 - 10 repeats) / 90 ({runs} runs, in turn, medians) | ms a match |")
 print("|---|---:|")
 print(f"| `--sandbox none` | {med(n_match) / 1000:.2f} |")
 print(f"| `--sandbox full` (a warm sandbox) | {med(f_match) / 1000:.2f} |")
 print(f"| the warm sandbox's cost per match (paired differences) | **{med(f - n for f, n in zip(f_match, n_match)) / 1000:.2f}** |")
+print(f"| `--sandbox full`, the pool off (`MAZEARENA_SANDBOX_AHEAD=0`) | {med(o_match) / 1000:.2f} |")
+print(f"| the warm sandbox's cost per match, the pool off (paired differences) | {med(o - n for o, n in zip(o_match, n_match)) / 1000:.2f} |")
 print()
 wf = [tuple(float(x) for x in l.split()) for l in open(f"{tmp}/warm_floor.txt")]
 wf_wall = med(r[2] - r[0] for r in wf)
 wf_cpu = med(r[3] - r[1] for r in wf)
+wfn_wall = med(r[4] - r[0] for r in wf)
+wfn_cpu = med(r[5] - r[1] for r in wf)
 print(f"| the floor of a warm match: benches/warm_floor.c, 500 rounds of `/usr/bin/true` ({len(wf)} runs, in turn, medians) | wall (ms a round) | the machine's CPU (ms a round) |")
 print("|---|---:|---:|")
 print(f"| started plainly (`posix_spawn`) | {med(r[0] for r in wf):.3f} | {med(r[1] for r in wf):.3f} |")
 print(f"| in new PID, mount and IPC namespaces with the warm sandbox's mounts and walls | {med(r[2] for r in wf):.3f} | {med(r[3] for r in wf):.3f} |")
 print(f"| the floor of a warm match's isolation (paired differences) | **{wf_wall:.3f}** | **{wf_cpu:.3f}** |")
+print(f"| the same in a network namespace of its own (loopback up) | {med(r[4] for r in wf):.3f} | {med(r[5] for r in wf):.3f} |")
+print(f"| the floor with a network namespace of its own (paired differences) | **{wfn_wall:.3f}** | **{wfn_cpu:.3f}** |")
 print()
 none_cpu = med(r[1] for r in t["none"]) / t["none"][0][2]
 full_cpu = med(r[1] for r in t["full"]) / t["full"][0][2]
 print(f"The C kit's match takes {none_cpu:.2f} ms of the machine's CPU without the sandbox and {full_cpu:.2f} ms in it (the tournament above): "
-      f"0.9x its throughput allows {none_cpu / 0.9 - none_cpu:.2f} ms more a match; "
-      f"a sandbox that did only the floor's work would be at {none_cpu / (none_cpu + wf_cpu):.2f}x.")
+      f"0.95x its throughput allows {none_cpu / 0.95 - none_cpu:.2f} ms more a match; "
+      f"a sandbox that did only the floor's work would be at {none_cpu / (none_cpu + wf_cpu):.2f}x without a network namespace of each match's own "
+      f"and at {none_cpu / (none_cpu + wfn_cpu):.2f}x with one.")
 print()
 floor = [tuple(int(x) for x in l.split()) for l in open(f"{tmp}/floor.txt")]
 print(f"| the one-shot floor ({len(floor)} runs, in turn, medians) | ms |")
@@ -255,4 +266,6 @@ print("|---|---:|")
 print(f"| `/usr/bin/true` | {med(f[0] for f in floor) / 1000:.2f} |")
 print(f"| `bwrap` (PID, network, IPC, UTS, mount namespaces; `/usr` only) `/usr/bin/true` | {med(f[1] for f in floor) / 1000:.2f} |")
 print(f"| bubblewrap's namespaces alone (paired differences) | **{med(f[1] - f[0] for f in floor) / 1000:.2f}** |")
+print()
+print(f"A one-shot match's sandbox ({cost / 1000:.2f} ms, the first table) is {cost / med(f[1] - f[0] for f in floor):.2f}x bubblewrap's own start.")
 PY

@@ -10,12 +10,14 @@
  *              entries into work/, and puts up the walls (limits, an unprivileged uid, no
  *              new privileges, Landlock, a seccomp deny list of the same length as the
  *              warm sandbox's per-match one), then starts BOT with posix_spawn, waits for
- *              it and ends, taking its namespaces with it.
+ *              it and ends, taking its namespaces with it; or
+ *   isolated-net the same in a network namespace of its own too, its loopback brought
+ *              up (as every warm match has since each got one).
  * It prints, for ROUNDS rounds, the wall time and the machine's CPU time (/proc/stat:
  * the kernel's work on other cores, such as a namespace's tear-down, included) per
  * round.
  *
- *   warm_floor plain|isolated ROUNDS WORK BOTDIR BOT [ARGS...]
+ *   warm_floor plain|isolated|isolated-net ROUNDS WORK BOTDIR BOT [ARGS...]
  *
  * WORK is an empty folder of the caller's (the scratch mount point and the bot's
  * folder's mount point are made in it). Needs root. */
@@ -24,6 +26,9 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <linux/filter.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
 #include <linux/seccomp.h>
 #include <sched.h>
 #include <signal.h>
@@ -107,8 +112,21 @@ static void seccomp(void) {
     if (prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, &prog) != 0) die("seccomp");
 }
 
-static int match_init(const char *work, const char *botdir, char **bot) {
+/* Brings the loopback of this process's network namespace up. */
+static void loopback_up(void) {
+    int s = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    struct ifreq req;
+    memset(&req, 0, sizeof req);
+    strcpy(req.ifr_name, "lo");
+    if (s < 0 || ioctl(s, SIOCGIFFLAGS, &req)) die("lo");
+    req.ifr_flags |= IFF_UP;
+    if (ioctl(s, SIOCSIFFLAGS, &req)) die("lo up");
+    close(s);
+}
+
+static int match_init(const char *work, const char *botdir, char **bot, int net) {
     char scratch[4096], mounted[4096], path[8192], target[8192];
+    if (net) loopback_up();
     snprintf(scratch, sizeof scratch, "%s/scratch", work);
     snprintf(mounted, sizeof mounted, "%s/bot", work);
     if (mount(NULL, "/", NULL, MS_REC | MS_PRIVATE, NULL)) die("private");
@@ -155,8 +173,9 @@ static int match_init(const char *work, const char *botdir, char **bot) {
 }
 
 int main(int argc, char **argv) {
-    if (argc < 6) { fprintf(stderr, "usage: warm_floor plain|isolated ROUNDS WORK BOTDIR BOT [ARGS...]\n"); return 2; }
-    int isolated = strcmp(argv[1], "isolated") == 0;
+    if (argc < 6) { fprintf(stderr, "usage: warm_floor plain|isolated|isolated-net ROUNDS WORK BOTDIR BOT [ARGS...]\n"); return 2; }
+    int net = strcmp(argv[1], "isolated-net") == 0;
+    int isolated = net || strcmp(argv[1], "isolated") == 0;
     int rounds = atoi(argv[2]);
     const char *work = argv[3], *botdir = argv[4];
     char **bot = argv + 5;
@@ -172,9 +191,10 @@ int main(int argc, char **argv) {
     for (int i = 0; i < rounds; i++) {
         pid_t pid;
         if (isolated) {
-            pid = syscall(SYS_clone, CLONE_NEWPID | CLONE_NEWNS | CLONE_NEWIPC | SIGCHLD, 0, 0, 0, 0);
+            int flags = CLONE_NEWPID | CLONE_NEWNS | CLONE_NEWIPC | (net ? CLONE_NEWNET : 0);
+            pid = syscall(SYS_clone, flags | SIGCHLD, 0, 0, 0, 0);
             if (pid < 0) die("clone");
-            if (pid == 0) _exit(match_init(work, botdir, bot));
+            if (pid == 0) _exit(match_init(work, botdir, bot, net));
         } else {
             pid = spawn_bot(bot);
         }
