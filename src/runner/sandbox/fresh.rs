@@ -14,7 +14,7 @@
 //! kernel tears the parts down. Nothing is kept for a second match.
 
 use std::collections::VecDeque;
-use std::os::fd::{AsRawFd, OwnedFd, RawFd};
+use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
 
 /// One match's parts, made ahead.
 #[derive(Debug)]
@@ -107,7 +107,7 @@ impl FreshPool {
     /// One match's parts: this process enters a new network namespace, brings its
     /// loopback up, opens it, and comes back to its own.
     fn make(&self) -> Result<Fresh, String> {
-        let empty = super::supervisor::empty_layer()
+        let empty = super::mounts::empty_layer()
             .map_err(|e| format!("the bot's folder's empty layer: {e}"))?;
         // SAFETY: unshare(2) of this (single-threaded) process's network namespace.
         if unsafe { libc::unshare(libc::CLONE_NEWNET) } != 0 {
@@ -116,7 +116,7 @@ impl FreshPool {
                 std::io::Error::last_os_error()
             ));
         }
-        let net = super::supervisor::loopback_up()
+        let net = loopback_up()
             .map_err(|e| format!("bringing up a match's loopback: {e}"))
             .and_then(|()| open_ns("net").map_err(|e| format!("a new network namespace: {e}")));
         // SAFETY: setns(2) with a namespace descriptor this pool owns.
@@ -159,6 +159,34 @@ impl Leftovers {
             _tree: tree,
         }
     }
+}
+
+/// Brings up the loopback of the match's own network namespace, as bubblewrap does for
+/// a one-shot sandbox's: a bot may listen on and talk to itself, never beyond.
+pub fn loopback_up() -> std::io::Result<()> {
+    // SAFETY: socket(2) with constant arguments; the descriptor is owned below.
+    let fd = unsafe { libc::socket(libc::AF_INET, libc::SOCK_DGRAM | libc::SOCK_CLOEXEC, 0) };
+    if fd < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: a descriptor just made and owned by nothing else.
+    let socket = unsafe { OwnedFd::from_raw_fd(fd) };
+    // SAFETY: ifreq is plain data; zeroed is a valid value.
+    let mut req: libc::ifreq = unsafe { std::mem::zeroed() };
+    for (to, from) in req.ifr_name.iter_mut().zip(b"lo\0") {
+        *to = *from as libc::c_char;
+    }
+    // SAFETY: SIOCGIFFLAGS and SIOCSIFFLAGS read and write the ifreq given.
+    unsafe {
+        if libc::ioctl(socket.as_raw_fd(), libc::SIOCGIFFLAGS, &mut req) < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        req.ifr_ifru.ifru_flags |= libc::IFF_UP as libc::c_short;
+        if libc::ioctl(socket.as_raw_fd(), libc::SIOCSIFFLAGS, &req) < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+    }
+    Ok(())
 }
 
 /// This thread's namespace of `kind`, opened.

@@ -23,6 +23,7 @@ pub mod cgroup;
 pub mod enter;
 pub mod fresh;
 pub mod jail;
+pub mod mounts;
 pub mod proctree;
 pub mod seccomp;
 pub mod supervisor;

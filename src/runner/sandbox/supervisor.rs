@@ -3,18 +3,21 @@
 //! matches of one worker slot. Its standard input is a `SOCK_SEQPACKET` socket to the
 //! runner; nothing else reaches it.
 //!
-//! For each match the runner sends a [`Request`] with four descriptors: the bot's stdin,
-//! stdout and stderr, and its folder as a detached read-only mount (`open_tree`). The
-//! supervisor clones a fresh **match init** into new PID, mount and IPC namespaces,
-//! which mounts a fresh `/proc` (this match's processes only), a fresh scratch tmpfs
-//! (`/sandbox`: `tmp/` and `work/`), attaches the bot's folder at `/run/mazearena/bot`,
-//! then puts up the jail's walls on itself ([`super::jail::walls`]: uid, limits,
-//! `no_new_privs`, Landlock, seccomp), links each entry of the folder in `work/`, and only
-//! then starts the bot's program, which inherits every wall. When the bot's process ends, the
-//! init ends, and the kernel kills whatever is left in its PID namespace; the
-//! mount and IPC namespaces, with the scratch area and every IPC object, go with the
-//! last process. Nothing of a match is left for the next one: not a process, a file, an
-//! IPC object or a PID number.
+//! For each match the runner sends a [`Request`] with the bot's stdin, stdout and stderr,
+//! its folder as a detached read-only mount (`open_tree`), and the files of the match's
+//! own cgroup. The supervisor clones a fresh **match init** into new PID, mount and IPC
+//! namespaces, which enters the network namespace made for it ahead
+//! ([`super::fresh`]), mounts a fresh `/proc` (this match's processes only), a fresh
+//! scratch tmpfs (`/sandbox`: `tmp/` and `work/`), attaches the bot's folder at
+//! `/run/mazearena/bot` ([`super::mounts`]), moves itself into the match's cgroup and a
+//! cgroup namespace of its own, then puts up the jail's walls on itself
+//! ([`super::jail::walls`]: uid, limits, `no_new_privs`, Landlock, seccomp), links each
+//! entry of the folder in `work/`, and only then starts the bot's program, which inherits
+//! every wall. When the bot's process ends, the init ends, and the kernel kills whatever
+//! is left in its PID namespace; once the supervisor has told the runner, it drops what
+//! it kept of the match, and the mount, network and IPC namespaces, with the scratch area
+//! and every IPC object, go. Nothing of a match is left for the next one: not a process,
+//! a file, an IPC object, a namespace, a cgroup or a PID number.
 
 use std::ffi::OsString;
 use std::io::IoSlice;
@@ -523,7 +526,7 @@ fn prepare(request: &Request, tree: &OwnedFd, fresh: Option<&Fresh>) -> Result<(
     .map_err(|e| at("mounting /proc", e))?;
     for p in ["/proc/sys", "/proc/sysrq-trigger", "/proc/irq", "/proc/bus"] {
         if Path::new(p).exists() {
-            read_only_bind(p).map_err(|e| at(p, e))?;
+            super::mounts::read_only_bind(p).map_err(|e| at(p, e))?;
         }
     }
     let options = format!("size={},mode=0755", request.scratch_bytes);
@@ -547,42 +550,16 @@ fn prepare(request: &Request, tree: &OwnedFd, fresh: Option<&Fresh>) -> Result<(
     let empty = match fresh {
         Some(fresh) => &fresh.empty,
         None => {
-            made = empty_layer().map_err(|e| format!("the bot's folder's empty layer: {e}"))?;
+            made = super::mounts::empty_layer()
+                .map_err(|e| format!("the bot's folder's empty layer: {e}"))?;
             &made
         }
     };
-    attach_unnamed(tree, empty, BOT_FILES)
+    super::mounts::attach_unnamed(tree, empty, BOT_FILES)
         .map_err(|e| format!("attaching the bot's folder: {e}"))?;
     if fresh.is_none() {
-        loopback_up().map_err(|e| format!("bringing up the match's loopback: {e}"))?;
-    }
-    Ok(())
-}
-
-/// Brings up the loopback of the match's own network namespace, as bubblewrap does for
-/// a one-shot sandbox's: a bot may listen on and talk to itself, never beyond.
-pub(super) fn loopback_up() -> std::io::Result<()> {
-    // SAFETY: socket(2) with constant arguments; the descriptor is owned below.
-    let fd = unsafe { libc::socket(libc::AF_INET, libc::SOCK_DGRAM | libc::SOCK_CLOEXEC, 0) };
-    if fd < 0 {
-        return Err(std::io::Error::last_os_error());
-    }
-    // SAFETY: a descriptor just made and owned by nothing else.
-    let socket = unsafe { OwnedFd::from_raw_fd(fd) };
-    // SAFETY: ifreq is plain data; zeroed is a valid value.
-    let mut req: libc::ifreq = unsafe { std::mem::zeroed() };
-    for (to, from) in req.ifr_name.iter_mut().zip(b"lo\0") {
-        *to = *from as libc::c_char;
-    }
-    // SAFETY: SIOCGIFFLAGS and SIOCSIFFLAGS read and write the ifreq given.
-    unsafe {
-        if libc::ioctl(socket.as_raw_fd(), libc::SIOCGIFFLAGS, &mut req) < 0 {
-            return Err(std::io::Error::last_os_error());
-        }
-        req.ifr_ifru.ifru_flags |= libc::IFF_UP as libc::c_short;
-        if libc::ioctl(socket.as_raw_fd(), libc::SIOCSIFFLAGS, &req) < 0 {
-            return Err(std::io::Error::last_os_error());
-        }
+        super::fresh::loopback_up()
+            .map_err(|e| format!("bringing up the match's loopback: {e}"))?;
     }
     Ok(())
 }
@@ -598,138 +575,6 @@ fn link_bot_files() -> Result<(), String> {
             .map_err(|e| format!("a link to the bot's file {name:?}: {e}"))?;
     }
     Ok(())
-}
-
-/// Binds `path` onto itself read-only.
-fn read_only_bind(path: &str) -> Result<(), nix::Error> {
-    use nix::mount::{MsFlags, mount};
-    let none = None::<&str>;
-    mount(
-        Some(path),
-        path,
-        none,
-        MsFlags::MS_BIND | MsFlags::MS_REC,
-        none,
-    )?;
-    mount(
-        none,
-        path,
-        none,
-        MsFlags::MS_BIND
-            | MsFlags::MS_REMOUNT
-            | MsFlags::MS_RDONLY
-            | MsFlags::MS_NOSUID
-            | MsFlags::MS_NODEV
-            | MsFlags::MS_NOEXEC,
-        none,
-    )
-}
-
-/// `move_mount(2)` flag: the source is the descriptor itself.
-const MOVE_MOUNT_F_EMPTY_PATH: libc::c_uint = 0x4;
-
-/// Attaches the detached mount `tree` at `at`.
-fn attach(tree: &OwnedFd, at: &str) -> std::io::Result<()> {
-    let at = std::ffi::CString::new(at)?;
-    // SAFETY: move_mount(2) with a live descriptor and NUL-terminated paths.
-    let r = unsafe {
-        libc::syscall(
-            libc::SYS_move_mount,
-            tree.as_raw_fd(),
-            c"".as_ptr(),
-            libc::AT_FDCWD,
-            at.as_ptr(),
-            MOVE_MOUNT_F_EMPTY_PATH,
-        )
-    };
-    if r == 0 {
-        Ok(())
-    } else {
-        Err(std::io::Error::last_os_error())
-    }
-}
-
-/// `fsconfig(2)` commands and `fsmount(2)` attributes (linux/mount.h).
-const FSCONFIG_SET_FD: libc::c_uint = 5;
-const FSCONFIG_CMD_CREATE: libc::c_uint = 6;
-const MOUNT_ATTR_RDONLY: libc::c_uint = 0x1;
-const MOUNT_ATTR_NOSUID: libc::c_uint = 0x2;
-const MOUNT_ATTR_NODEV: libc::c_uint = 0x4;
-
-/// A descriptor a system call of the new mount API returned, or its error.
-fn owned(r: libc::c_long) -> std::io::Result<OwnedFd> {
-    if r < 0 {
-        return Err(std::io::Error::last_os_error());
-    }
-    // SAFETY: the call returned a new descriptor that nothing else owns.
-    Ok(unsafe { OwnedFd::from_raw_fd(r as RawFd) })
-}
-
-/// A new filesystem context of `kind` (`fsopen(2)`).
-fn fs_open(kind: &std::ffi::CStr) -> std::io::Result<OwnedFd> {
-    // SAFETY: fsopen(2) with a NUL-terminated name.
-    owned(unsafe { libc::syscall(libc::SYS_fsopen, kind.as_ptr(), 0u32) })
-}
-
-/// `fsconfig(2)` on context `fs`: `cmd` with `key` and descriptor `aux`.
-fn fs_config(
-    fs: &OwnedFd,
-    cmd: libc::c_uint,
-    key: Option<&std::ffi::CStr>,
-    aux: libc::c_int,
-) -> std::io::Result<()> {
-    let key = key.map_or(std::ptr::null(), std::ffi::CStr::as_ptr);
-    // SAFETY: fsconfig(2) with a live context, a NUL-terminated key or null, no value.
-    let r = unsafe {
-        libc::syscall(
-            libc::SYS_fsconfig,
-            fs.as_raw_fd(),
-            cmd,
-            key,
-            std::ptr::null::<libc::c_void>(),
-            aux,
-        )
-    };
-    if r == 0 {
-        Ok(())
-    } else {
-        Err(std::io::Error::last_os_error())
-    }
-}
-
-/// The detached mount of context `fs`, made with `attrs` (`fsmount(2)`).
-fn fs_mount(fs: &OwnedFd, attrs: libc::c_uint) -> std::io::Result<OwnedFd> {
-    fs_config(fs, FSCONFIG_CMD_CREATE, None, 0)?;
-    // SAFETY: fsmount(2) with a live, created context.
-    owned(unsafe { libc::syscall(libc::SYS_fsmount, fs.as_raw_fd(), 0u32, attrs) })
-}
-
-/// A detached, read-only, empty tmpfs: the lower of an overlay's two layers under the
-/// bot's folder ([`attach_unnamed`]).
-pub(super) fn empty_layer() -> std::io::Result<OwnedFd> {
-    fs_mount(&fs_open(c"tmpfs")?, MOUNT_ATTR_RDONLY)
-}
-
-/// Mounts the bot's folder (the detached tree `tree`) read-only at `at` as the upper of
-/// the two lower layers of an overlay whose other layer is `empty` ([`empty_layer`],
-/// this match's own). A bind mount's line in the mount table names the folder's path on
-/// the host (the server's data folder and the bundle's hash); an overlay's layers given
-/// as detached trees are shown as `/`.
-fn attach_unnamed(tree: &OwnedFd, empty: &OwnedFd, at: &str) -> std::io::Result<()> {
-    let overlay = fs_open(c"overlay")?;
-    for layer in [tree, empty] {
-        fs_config(
-            &overlay,
-            FSCONFIG_SET_FD,
-            Some(c"lowerdir+"),
-            layer.as_raw_fd(),
-        )?;
-    }
-    let mounted = fs_mount(
-        &overlay,
-        MOUNT_ATTR_RDONLY | MOUNT_ATTR_NOSUID | MOUNT_ATTR_NODEV,
-    )?;
-    attach(&mounted, at)
 }
 
 #[cfg(test)]
