@@ -570,9 +570,9 @@ impl BotProcess {
 
     /// Kills every process of the bot: its cgroup, its process tree and its group.
     pub fn kill_all(&self) {
-        // A warm sandbox's cgroup holds the sandbox too, and its init's pid is not the
-        // runner's child: the match goes with its init, killed through its pidfd (never
-        // by a pid that may have been reused), and takes its PID namespace with it.
+        // A warm match's init is not the runner's child: the match goes with its init,
+        // killed through its pidfd (never by a pid that may have been reused), and takes
+        // its PID namespace with it; its cgroup is emptied when it is removed.
         if let Started::Warm(warm) = &self.started {
             warm.kill();
             return;

@@ -214,7 +214,8 @@ impl CgroupRoot {
     /// this match; else, when none can be taken up, one of its own as
     /// [`CgroupRoot::create`] makes. A kept cgroup spares a match the making of its
     /// cgroups and their removal (docs/PERFORMANCE.md); its counters are read as
-    /// differences from the match's start, as a warm sandbox's are.
+    /// differences from the match's start. (A warm match has a cgroup of its own,
+    /// [`super::ahead`].)
     ///
     /// A kept cgroup is held by an exclusive `flock` on its own folder in the pids
     /// hierarchy for as long as its match lasts: every runner that shares the hierarchy
