@@ -560,29 +560,34 @@ async fn an_api_only_server_needs_no_sandbox_and_one_that_plays_refuses_without_
     assert_eq!(health["workers"], json!([]), "{health}");
 }
 
+/// A full sandbox of its own that keeps warm sandboxes, as a runner of many matches
+/// has; `None` (the test skipped, said why) without the sandbox or when not root.
+fn warm_runner(test: &str) -> Option<mazearena::runner::Sandbox> {
+    full_sandbox(test)?;
+    if !nix::unistd::geteuid().is_root() {
+        eprintln!("SKIPPED {test}: warm sandboxes are used by a runner that is root");
+        return None;
+    }
+    let setup = mazearena::runner::sandbox::Setup {
+        reuse: true,
+        ..Default::default()
+    };
+    Some(
+        mazearena::runner::Sandbox::full(Path::new(env!("CARGO_BIN_EXE_mazearena")), &setup)
+            .unwrap(),
+    )
+}
+
 /// A runner of many matches keeps a warm sandbox for them (servers, workers,
 /// tournaments): every attack that tries to carry something from one match to the next
 /// finds nothing, and no limit hit or CPU time of a match shows in the next one's
 /// record, while the same sandbox plays them all.
 #[tokio::test]
 async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
-    use mazearena::runner::sandbox::Setup;
     use mazearena::runner::{BotSpec, Limits, MatchStatus, run_match};
-    let Some(_) = full_sandbox("hostile warm") else {
+    let Some(warm) = warm_runner("hostile warm") else {
         return;
     };
-    if !nix::unistd::geteuid().is_root() {
-        eprintln!("SKIPPED hostile warm: warm sandboxes are used by a runner that is root");
-        return;
-    }
-    let warm = mazearena::runner::Sandbox::full(
-        Path::new(env!("CARGO_BIN_EXE_mazearena")),
-        &Setup {
-            reuse: true,
-            ..Setup::default()
-        },
-    )
-    .unwrap();
     let mazearena::runner::Sandbox::Full(full) = &warm else {
         unreachable!("a full sandbox was asked for")
     };
@@ -675,24 +680,11 @@ async fn a_warm_sandbox_carries_nothing_from_one_match_to_the_next() {
 /// and is gone once the match is over.
 #[tokio::test]
 async fn a_warm_sandbox_hands_no_namespace_cgroup_or_mount_to_two_matches() {
-    use mazearena::runner::sandbox::Setup;
     use mazearena::runner::{BotSpec, Limits, run_match};
     use std::collections::HashSet;
-    let Some(_) = full_sandbox("hostile fresh parts") else {
+    let Some(warm) = warm_runner("hostile fresh parts") else {
         return;
     };
-    if !nix::unistd::geteuid().is_root() {
-        eprintln!("SKIPPED hostile fresh parts: warm sandboxes are used by a runner that is root");
-        return;
-    }
-    let warm = mazearena::runner::Sandbox::full(
-        Path::new(env!("CARGO_BIN_EXE_mazearena")),
-        &Setup {
-            reuse: true,
-            ..Setup::default()
-        },
-    )
-    .unwrap();
     let mazearena::runner::Sandbox::Full(full) = &warm else {
         unreachable!("a full sandbox was asked for")
     };

@@ -185,12 +185,7 @@ impl CgroupRoot {
     /// # Errors
     /// The file system errors of making or configuring it.
     pub fn create(&self, limits: CgroupLimits) -> std::io::Result<MatchCgroup> {
-        let name = format!(
-            "m-{}-{}",
-            std::process::id(),
-            NEXT.fetch_add(1, Ordering::Relaxed)
-        );
-        self.build(&name, limits, false, true)
+        self.build(&own_name(), limits, false, true)
     }
 
     /// Makes a cgroup as [`CgroupRoot::create`] does, but with no hold on the CPU
@@ -200,12 +195,7 @@ impl CgroupRoot {
     /// # Errors
     /// The file system errors of making or configuring it.
     pub fn create_unheld(&self, limits: CgroupLimits) -> std::io::Result<MatchCgroup> {
-        let name = format!(
-            "m-{}-{}",
-            std::process::id(),
-            NEXT.fetch_add(1, Ordering::Relaxed)
-        );
-        self.build(&name, limits, false, false)
+        self.build(&own_name(), limits, false, false)
     }
 
     /// The cgroup of a one-shot match (`mazearena run`, or a match that cannot be
@@ -345,6 +335,16 @@ impl CgroupRoot {
         }
         Ok(group)
     }
+}
+
+/// A name no other cgroup of this process had: `m-PID-N` (the sweep of stale cgroups
+/// reads the pid back).
+fn own_name() -> String {
+    format!(
+        "m-{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    )
 }
 
 /// How many cgroups are kept for one-shot matches, in each hierarchy.
