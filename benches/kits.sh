@@ -12,6 +12,9 @@
 # medians.
 #
 #   bash benches/kits.sh [RUNS] [MAZES]     (default 3 and 40)
+#
+# KITS and SETTINGS narrow a run (e.g. `KITS=python SETTINGS="full none"` for more rounds of
+# one kit's ratio); a setting not taken is shown as "-".
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-3}
@@ -26,7 +29,8 @@ for f in $(ls ../shared/mazes/micromouseonline/classic/*.txt | sort); do
   ./target/release/mazearena maze solve "$f" >/dev/null 2>&1 && files+=("$f")
   [ ${#files[@]} -ge "$MAZES" ] && break
 done
-KITS=(python c java)
+read -r -a KITS <<<"${KITS:-python c java}"
+read -r -a SETTINGS <<<"${SETTINGS:-full pooloff none}"
 
 run() { # $1: kit, $2: setting (full, pooloff, none), $3...: mazes; prints "ms matches"
   local kit=$1 setting=$2 db=$tmp/t.db a b out sandbox=$2 ahead=1
@@ -43,7 +47,7 @@ run() { # $1: kit, $2: setting (full, pooloff, none), $3...: mazes; prints "ms m
 declare -A PER
 for ((i = 1; i <= RUNS; i++)); do
   for kit in "${KITS[@]}"; do
-    for sandbox in full pooloff none; do
+    for sandbox in "${SETTINGS[@]}"; do
       read -r t1 n1 < <(run "$kit" "$sandbox" "${files[0]}")
       read -r tn nn < <(run "$kit" "$sandbox" "${files[@]}")
       per=$(python3 -c "print(($tn - $t1) / ($nn - $n1))")
@@ -64,17 +68,22 @@ echo "match's network namespace made ahead: the default), in it with the pool of
 echo "(\`MAZEARENA_SANDBOX_AHEAD=0\`: made on each match's start), and without the sandbox (the"
 echo "baseline), taken in turn; medians of $RUNS rounds. \"x\" is the throughput beside the baseline's."
 echo
-python3 - "$RUNS" "$N_python" "$N_c" "$N_java" \
-  "${PER[python-full]}" "${PER[python-pooloff]}" "${PER[python-none]}" \
-  "${PER[c-full]}" "${PER[c-pooloff]}" "${PER[c-none]}" \
-  "${PER[java-full]}" "${PER[java-pooloff]}" "${PER[java-none]}" <<'PY'
+python3 - "$RUNS" "${N_python:-}" "${N_c:-}" "${N_java:-}" \
+  "${PER[python-full]:-}" "${PER[python-pooloff]:-}" "${PER[python-none]:-}" \
+  "${PER[c-full]:-}" "${PER[c-pooloff]:-}" "${PER[c-none]:-}" \
+  "${PER[java-full]:-}" "${PER[java-pooloff]:-}" "${PER[java-none]:-}" <<'PY'
 import statistics, sys
-med = lambda s: statistics.median(float(x) for x in s.split())
+med = lambda s: statistics.median(float(x) for x in s.split()) if s.split() else None
+fmt = lambda v, f: "-" if v is None else format(v, f)
+ratio = lambda b, v: "-" if b is None or v is None else f"{b / v:.2f}"
 a = sys.argv
 rows = [("Python", a[2], a[5:8]), ("C", a[3], a[8:11]), ("Java", a[4], a[11:14])]
 print("| kit | matches a run | ms a match, sandbox | x | ms a match, sandbox, pool off | x | ms a match, no sandbox (baseline) | matches a minute per core: sandbox / no sandbox |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|")
 for name, n, (full, off, none) in rows:
+    if not n:
+        continue
     f, o, b = med(full), med(off), med(none)
-    print(f"| {name} | {n} | {f:.1f} | {b / f:.2f} | {o:.1f} | {b / o:.2f} | {b:.1f} | {60000 / f:,.0f} / {60000 / b:,.0f} |")
+    per_min = "-" if f is None or b is None else f"{60000 / f:,.0f} / {60000 / b:,.0f}"
+    print(f"| {name} | {n} | {fmt(f, '.1f')} | {ratio(b, f)} | {fmt(o, '.1f')} | {ratio(b, o)} | {fmt(b, '.1f')} | {per_min} |")
 PY

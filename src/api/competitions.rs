@@ -259,6 +259,9 @@ pub struct CompetitionView {
     pub max_selected: i64,
     /// Whether the private mazes are shown with the results.
     pub reveal_private_mazes: bool,
+    /// Whether the results wait for an organiser to publish them (`state` is `held`
+    /// from when they are written until then).
+    pub hold_results: bool,
     /// How each new version is checked before it plays: `start` (invalid only for a
     /// failure that no maze causes), `match` (invalid for any failure in its validation
     /// match) or `off`.
@@ -336,6 +339,7 @@ pub(super) async fn view(
         selection: c.selection.clone(),
         max_selected: c.max_selected,
         reveal_private_mazes: c.reveal_private_mazes,
+        hold_results: c.hold_results,
         validation: c.validation.clone(),
         limits: c.limit_set(),
         match_wall_clock_ms: c
@@ -865,10 +869,18 @@ pub struct ResultsView {
 
 async fn final_results(
     state: &AppState,
+    caller: &Caller,
     name: &str,
 ) -> ApiResult<(CompetitionRow, Vec<ResultRow>)> {
     let c = find(state, name).await?;
-    if c.state.as_deref() != Some("final") {
+    let held = c.state.as_deref() == Some("held");
+    if held && !caller.organises(&c) {
+        return Err(ApiError::Conflict(format!(
+            "the results of competition {} are held by its organisers until the reveal",
+            c.name
+        )));
+    }
+    if c.state.as_deref() != Some("final") && !held {
         let progress = ops::final_progress(&state.storage, &c).await?;
         return Err(ApiError::Conflict(match (c.closes_at, progress) {
             (_, Some(_)) => format!(
@@ -894,9 +906,10 @@ async fn final_results(
     responses((status = 200, body = ResultsView), (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
 async fn results(
     State(state): State<AppState>,
+    caller: Caller,
     AppPath(name): AppPath<String>,
 ) -> ApiResult<axum::Json<ResultsView>> {
-    let (c, rows) = final_results(&state, &name).await?;
+    let (c, rows) = final_results(&state, &caller, &name).await?;
     let differ = ops::recount_differences(&state.storage, &c).await?;
     Ok(axum::Json(ResultsView {
         competition: c.name.clone(),
@@ -914,9 +927,10 @@ async fn results(
         (status = 409, body = ErrorBody)))]
 async fn results_csv(
     State(state): State<AppState>,
+    caller: Caller,
     AppPath(name): AppPath<String>,
 ) -> ApiResult<impl IntoResponse> {
-    let (_, rows) = final_results(&state, &name).await?;
+    let (_, rows) = final_results(&state, &caller, &name).await?;
     Ok((
         [(header::CONTENT_TYPE, "text/csv; charset=utf-8")],
         ops::results_csv(&rows),

@@ -167,6 +167,7 @@ impl From<RegistryError> for ApiError {
             RegistryError::Invalid(msg) => ApiError::Unprocessable(msg),
             RegistryError::Conflict(msg) => ApiError::Conflict(msg),
             RegistryError::NotFound(msg) => ApiError::NotFound(msg),
+            RegistryError::Forbidden(msg) => ApiError::Forbidden(msg),
             RegistryError::Bundle(
                 e @ (BundleError::TooLarge { .. } | BundleError::TooManyFiles { .. }),
             ) => ApiError::PayloadTooLarge(e.to_string()),

@@ -13,6 +13,7 @@ pub mod competitions;
 pub mod connections;
 pub mod entrants;
 pub mod error;
+pub mod finale;
 pub mod invites;
 pub mod leaderboard;
 pub mod limits;
@@ -131,6 +132,7 @@ pub fn routes() -> (Router<AppState>, utoipa::openapi::OpenApi) {
         .merge(bots::router())
         .merge(entrants::router())
         .merge(competitions::router())
+        .merge(finale::router())
         .merge(invites::router())
         .merge(practice::router())
         .merge(mazes::router())

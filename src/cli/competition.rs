@@ -98,6 +98,44 @@ pub enum CompetitionCommand {
         #[command(flatten)]
         db: DatabaseArg,
     },
+    /// Publish results held for the reveal (`hold_results`): from now on everyone sees
+    /// them.
+    Publish {
+        /// The competition's name.
+        name: String,
+        #[command(flatten)]
+        db: DatabaseArg,
+    },
+    /// Write the reveal of the final results (last place to first, each entrant's best
+    /// and worst private match inside) as one HTML file that plays without the server:
+    /// the organisers' copy (hidden private mazes are drawn, and it says so).
+    Reveal {
+        /// The competition's name.
+        name: String,
+        /// The file to write.
+        #[arg(long, short = 'o')]
+        out: PathBuf,
+        #[command(flatten)]
+        db: DatabaseArg,
+    },
+    /// Write the race of every entrant on one maze and seed (the final run's on a private
+    /// maze, the public set's on a public one) as one HTML file that plays without the
+    /// server.
+    Race {
+        /// The competition's name.
+        name: String,
+        /// The maze's name in the competition.
+        #[arg(long)]
+        maze: String,
+        /// The repeat index (one seed), from 0.
+        #[arg(long, default_value_t = 0)]
+        repeat: i64,
+        /// The file to write.
+        #[arg(long, short = 'o')]
+        out: PathBuf,
+        #[command(flatten)]
+        db: DatabaseArg,
+    },
     /// Register an organiser and print its key (shown once): it makes competitions
     /// through the API, and manages and sees what seals the ones it made (or was handed
     /// with `edit --organiser`), nothing else.
@@ -132,6 +170,9 @@ pub struct EditArgs {
     /// The final run's repeats (0: as many as `repeats`).
     #[arg(long)]
     final_repeats: Option<u32>,
+    /// Hold the results for the reveal (`true`) or publish them once written (`false`).
+    #[arg(long)]
+    hold_results: Option<bool>,
     /// Hand the competition to this organiser (registered with `competition organiser`).
     #[arg(long)]
     organiser: Option<String>,
@@ -284,6 +325,57 @@ pub fn run(cmd: CompetitionCommand) -> anyhow::Result<()> {
                 );
                 Ok(())
             }
+            CompetitionCommand::Publish { name, db } => {
+                let storage = open(&db, false).await?;
+                let c = find(&storage, &name).await?;
+                ops::publish(&storage, &c).await?;
+                println!("the results of {} are published", c.name);
+                Ok(())
+            }
+            CompetitionCommand::Reveal { name, out, db } => {
+                let storage = open(&db, false).await?;
+                let c = find(&storage, &name).await?;
+                let reveal = crate::registry::finale::reveal(&storage, &c, true).await?;
+                std::fs::write(&out, crate::web::finale::reveal_file(&reveal))
+                    .with_context(|| format!("cannot write {}", out.display()))?;
+                println!(
+                    "wrote {}: the reveal of {} entrants{}",
+                    out.display(),
+                    reveal.lines.len(),
+                    if reveal.organiser_copy {
+                        " (it draws hidden private mazes: an organiser's copy)"
+                    } else {
+                        ""
+                    }
+                );
+                Ok(())
+            }
+            CompetitionCommand::Race {
+                name,
+                maze,
+                repeat,
+                out,
+                db,
+            } => {
+                let storage = open(&db, false).await?;
+                let c = find(&storage, &name).await?;
+                let race = crate::registry::finale::race(&storage, &c, true, &maze, repeat).await?;
+                std::fs::write(&out, crate::web::finale::race_file(&race))
+                    .with_context(|| format!("cannot write {}", out.display()))?;
+                println!(
+                    "wrote {}: {} robots on {} (seed {}){}",
+                    out.display(),
+                    race.runners.len(),
+                    race.maze,
+                    repeat + 1,
+                    if race.organiser_copy {
+                        "; the maze is hidden: an organiser's copy"
+                    } else {
+                        ""
+                    }
+                );
+                Ok(())
+            }
             CompetitionCommand::Organiser { name, db } => {
                 let storage = open(&db, false).await?;
                 let key = crate::registry::tokens::new_token()?;
@@ -400,6 +492,7 @@ async fn edit(args: EditArgs) -> anyhow::Result<()> {
         practice_per_day: args.practice_per_day,
         final_repeats: args.final_repeats,
         selection,
+        hold_results: args.hold_results,
         organiser: args.organiser,
         validation: args
             .validation

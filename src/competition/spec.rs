@@ -238,6 +238,11 @@ pub struct Spec<M> {
     /// final.
     #[serde(default)]
     pub reveal_private_mazes: bool,
+    /// Whether the results, once written, wait for an organiser to publish them (for a
+    /// reveal: the class learns them from `/competitions/NAME/reveal`); by default they
+    /// are published at once.
+    #[serde(default)]
+    pub hold_results: bool,
     /// The match limits.
     #[serde(default)]
     pub limits: Limits,
@@ -392,6 +397,7 @@ impl<M> Spec<M> {
             selection: self.selection,
             max_selected: self.max_selected,
             reveal_private_mazes: self.reveal_private_mazes,
+            hold_results: self.hold_results,
             limits: self.limits,
             validation: self.validation,
             mazes,

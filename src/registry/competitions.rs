@@ -216,6 +216,9 @@ pub struct Patch {
     pub final_repeats: Option<u32>,
     /// Whether the private mazes are shown with the results.
     pub reveal_private_mazes: Option<bool>,
+    /// Whether the results wait for an organiser to publish them (until they are
+    /// written: afterwards they are published, [`publish`]).
+    pub hold_results: Option<bool>,
     /// The match limits (all three, replacing the old).
     pub limits: Option<Limits>,
     /// How new versions are checked: `start`, `match` or `off` (versions checked
@@ -371,6 +374,20 @@ pub async fn edit(
     }
     if let Some(reveal) = patch.reveal_private_mazes {
         c.reveal_private_mazes = reveal;
+    }
+    if let Some(hold) = patch.hold_results.filter(|&h| h != c.hold_results) {
+        if matches!(c.state.as_deref(), Some("held" | "final")) {
+            return Err(RegistryError::Conflict(format!(
+                "the results of {} are written: they are published, not held, from now on{}",
+                c.name,
+                if c.state.as_deref() == Some("held") {
+                    " (publish them when the class is ready)"
+                } else {
+                    ""
+                }
+            )));
+        }
+        c.hold_results = hold;
     }
     if let Some(v) = patch.validation {
         c.validation = v.as_str().to_string();
@@ -934,7 +951,7 @@ pub async fn tick(storage: &Storage, now: i64) -> Result<TickReport> {
     for c in storage.list_competitions().await? {
         if c.kind != "competition"
             || !phase(&c, now).is_closed()
-            || c.state.as_deref() == Some("final")
+            || matches!(c.state.as_deref(), Some("final" | "held"))
         {
             continue;
         }
@@ -1148,9 +1165,20 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             uncertainty: Default::default(),
         });
     }
+    let reveal = mazes_to_reveal(storage, c, &private).await?;
+    Ok(storage.write_results(c, &rows, &reveal).await?)
+}
+
+/// The private mazes that publishing `c`'s results shows: all of them if it reveals
+/// them, but none that another live competition still uses.
+async fn mazes_to_reveal(
+    storage: &Storage,
+    c: &CompetitionRow,
+    private: &[CompetitionMaze],
+) -> Result<Vec<i64>> {
     let mut reveal = Vec::new();
     if c.reveal_private_mazes {
-        for m in &private {
+        for m in private {
             if !storage
                 .maze_in_other_live_competition(m.maze_id, c.competition_id)
                 .await?
@@ -1159,7 +1187,46 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             }
         }
     }
-    Ok(storage.write_results(c, &rows, &reveal).await?)
+    Ok(reveal)
+}
+
+/// Publishes the held results of `c` (its organisers' decision, after the reveal's
+/// rehearsal): from now on everyone sees them, the private board, the reveal and the
+/// races, and the private mazes if the competition reveals them.
+///
+/// # Errors
+/// [`RegistryError::Conflict`] when there are no held results (not written yet, or
+/// published already); the database.
+pub async fn publish(storage: &Storage, c: &CompetitionRow) -> Result<()> {
+    match c.state.as_deref() {
+        Some("held") => {}
+        Some("final") => {
+            return Err(RegistryError::Conflict(format!(
+                "the results of {} are published already",
+                c.name
+            )));
+        }
+        _ => {
+            return Err(RegistryError::Conflict(format!(
+                "competition {} has no results to publish yet: they are written once its final run has played",
+                c.name
+            )));
+        }
+    }
+    let private: Vec<CompetitionMaze> = storage
+        .competition_mazes(c.competition_id)
+        .await?
+        .into_iter()
+        .filter(|m| m.maze_set == "private")
+        .collect();
+    let reveal = mazes_to_reveal(storage, c, &private).await?;
+    if !storage.publish_results(c, &reveal).await? {
+        return Err(RegistryError::Conflict(format!(
+            "the results of {} are published already",
+            c.name
+        )));
+    }
+    Ok(())
 }
 
 /// The declared environment of a version as a manifest holds it: each variable's name
@@ -1302,6 +1369,7 @@ mod tests {
             selection: Rule::Latest,
             max_selected: 1,
             reveal_private_mazes: true,
+            hold_results: false,
             limits: Limits::default(),
             validation: Default::default(),
             mazes: MazeSets {
@@ -1750,6 +1818,7 @@ pub async fn export_files(storage: &Storage, c: &CompetitionRow) -> Result<Vec<(
         selection: Rule::parse(&c.selection).unwrap_or_default(),
         max_selected: c.max_selected as u32,
         reveal_private_mazes: c.reveal_private_mazes,
+        hold_results: c.hold_results,
         limits: c.limit_set(),
         validation: crate::competition::Validation::parse(&c.validation),
         mazes: sets,

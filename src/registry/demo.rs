@@ -151,6 +151,7 @@ pub async fn seed(
         selection: Rule::Latest,
         max_selected: 1,
         reveal_private_mazes: true,
+        hold_results: false,
         limits: Limits::default(),
         validation: Validation::Start,
         mazes: MazeSets {

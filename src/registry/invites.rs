@@ -145,6 +145,7 @@ mod tests {
             selection: Rule::Latest,
             max_selected: 1,
             reveal_private_mazes: false,
+            hold_results: false,
             limits: Limits::default(),
             validation: Default::default(),
             mazes: MazeSets {

@@ -26,6 +26,7 @@ pub mod cache;
 pub mod competitions;
 pub mod demo;
 pub mod entrants;
+pub mod finale;
 pub mod invites;
 pub mod mazes;
 pub mod migrate;
@@ -48,6 +49,10 @@ pub enum RegistryError {
     /// The thing asked for does not exist.
     #[error("{0}")]
     NotFound(String),
+    /// The thing exists, but not for this caller (sealed until the results, or its
+    /// organisers' only).
+    #[error("{0}")]
+    Forbidden(String),
     /// The bot's files were refused, or could not be stored.
     #[error(transparent)]
     Bundle(#[from] BundleError),
@@ -87,6 +92,7 @@ impl RegistryError {
             RegistryError::Invalid(_)
             | RegistryError::Conflict(_)
             | RegistryError::NotFound(_)
+            | RegistryError::Forbidden(_)
             | RegistryError::Quota { .. } => true,
             RegistryError::Bundle(e) => e.is_client_error(),
             RegistryError::Corrupt(_) | RegistryError::Storage(_) | RegistryError::Internal(_) => {
@@ -102,6 +108,7 @@ impl RegistryError {
             RegistryError::Invalid(_)
             | RegistryError::Conflict(_)
             | RegistryError::NotFound(_)
+            | RegistryError::Forbidden(_)
             | RegistryError::Corrupt(_) => true,
             RegistryError::Bundle(e) => e.is_client_error(),
             // The quota frees up with time.

@@ -51,9 +51,14 @@ pub struct CompetitionRow {
     /// Whether the private mazes are shown once the results are final.
     #[sqlx(try_from = "super::Flag")]
     pub reveal_private_mazes: bool,
+    /// Whether the results wait, once written, for an organiser to publish them
+    /// (state `held` until then).
+    #[sqlx(try_from = "super::Flag")]
+    pub hold_results: bool,
     /// The secret seeds (JSON array), one per repeat index.
     pub seeds: String,
-    /// `None` while open; `final_run` once the selection is made; `final` with results.
+    /// `None` while open; `final_run` once the selection is made; `held` with results
+    /// its organisers alone see (`hold_results`); `final` with published results.
     pub state: Option<String>,
     /// The public set's tournament.
     pub public_tournament_id: Option<i64>,
@@ -112,7 +117,7 @@ const COMPETITION_COLUMNS: &str = "competition_id, name, title, description, rul
     final_repeats, limits, opens_at, closes_at, freeze_ms, versions_per_day, practice_per_day,
     selection, max_selected, reveal_private_mazes, seeds, state, public_tournament_id,
     private_tournament_id, final_tournament_id, finalized_at, created_at, organiser_id,
-    invite_code, validation";
+    invite_code, validation, hold_results";
 
 /// A maze of a competition.
 #[derive(Debug, Clone, PartialEq, FromRow)]
@@ -317,9 +322,9 @@ impl Storage {
             "insert into competition (name, title, description, rules, kind, repeats, final_repeats,
                  limits, opens_at, closes_at, freeze_ms, versions_per_day, practice_per_day,
                  selection, max_selected, reveal_private_mazes, seeds, public_tournament_id,
-                 private_tournament_id, created_at, organiser_id, validation)
+                 private_tournament_id, created_at, organiser_id, validation, hold_results)
              values ($1, $2, $3, $4, 'competition', $5, $6, $7, $8, $9, $10, $11, $12, $13, $14,
-                 $15, $16, $17, $18, $19, $20, $21)
+                 $15, $16, $17, $18, $19, $20, $21, $22)
              returning competition_id",
         )
         .bind(&spec.name)
@@ -343,6 +348,7 @@ impl Storage {
         .bind(now)
         .bind(organiser_id)
         .bind(spec.validation.as_str())
+        .bind(i64::from(spec.hold_results))
         .fetch_one(&mut *tx)
         .await
         .map_err(|e| {
@@ -447,7 +453,7 @@ impl Storage {
             "update competition set title = $2, description = $3, rules = $4, opens_at = $5,
                  closes_at = $6, freeze_ms = $7, versions_per_day = $8, practice_per_day = $9,
                  selection = $10, max_selected = $11, final_repeats = $12,
-                 reveal_private_mazes = $13, limits = $14, validation = $15
+                 reveal_private_mazes = $13, limits = $14, validation = $15, hold_results = $16
              where competition_id = $1",
         )
         .bind(row.competition_id)
@@ -465,6 +471,7 @@ impl Storage {
         .bind(i64::from(row.reveal_private_mazes))
         .bind(&row.limits)
         .bind(&row.validation)
+        .bind(i64::from(row.hold_results))
         .execute(&mut *tx)
         .await?;
         sqlx::query("update tournament set limits = $2 where competition_id = $1")
@@ -1225,9 +1232,10 @@ impl Storage {
         Ok(true)
     }
 
-    /// Writes the final results once (the competition becomes `final`), unseals the final
-    /// run, and shows the private mazes if the competition says so and no other live
-    /// competition uses them. Returns false if another server did it first.
+    /// Writes the results of competition `c` (in its final run) in one transaction:
+    /// `held` for its organisers alone when it holds them (`hold_results`), else published
+    /// at once ([`Storage::publish_results`]'s work: `final`, its tournaments unsealed,
+    /// `reveal`'s mazes shown). False when another server wrote them first.
     ///
     /// # Errors
     /// Database failures.
@@ -1239,12 +1247,14 @@ impl Storage {
     ) -> Result<bool> {
         let _turn = self.write_turn().await;
         let mut tx = self.begin_write().await?;
+        let state = if c.hold_results { "held" } else { "final" };
         let moved = sqlx::query(
-            "update competition set state = 'final', finalized_at = $2
+            "update competition set state = $3, finalized_at = $2
              where competition_id = $1 and state = 'final_run'",
         )
         .bind(c.competition_id)
         .bind(now_ms())
+        .bind(state)
         .execute(&mut *tx)
         .await?
         .rows_affected();
@@ -1275,16 +1285,33 @@ impl Storage {
             .execute(&mut *tx)
             .await?;
         }
-        sqlx::query("update tournament set sealed = 0 where competition_id = $1")
-            .bind(c.competition_id)
-            .execute(&mut *tx)
-            .await?;
-        for maze_id in reveal {
-            sqlx::query("update maze set hidden = 0 where maze_id = $1")
-                .bind(maze_id)
-                .execute(&mut *tx)
-                .await?;
+        if !c.hold_results {
+            open_results(&mut tx, c.competition_id, reveal).await?;
         }
+        tx.commit().await?;
+        Ok(true)
+    }
+
+    /// Publishes the held results of competition `c`: `final`, its tournaments unsealed,
+    /// `reveal`'s mazes shown. False when they were not held (published already, or not
+    /// written).
+    ///
+    /// # Errors
+    /// Database failures.
+    pub async fn publish_results(&self, c: &CompetitionRow, reveal: &[i64]) -> Result<bool> {
+        let _turn = self.write_turn().await;
+        let mut tx = self.begin_write().await?;
+        let moved = sqlx::query(
+            "update competition set state = 'final' where competition_id = $1 and state = 'held'",
+        )
+        .bind(c.competition_id)
+        .execute(&mut *tx)
+        .await?
+        .rows_affected();
+        if moved == 0 {
+            return Ok(false);
+        }
+        open_results(&mut tx, c.competition_id, reveal).await?;
         tx.commit().await?;
         Ok(true)
     }
@@ -1406,6 +1433,26 @@ async fn insert_matches(
                 .bind(now);
         }
         query.execute(&mut **tx).await?;
+    }
+    Ok(())
+}
+
+/// What publishing results opens: the competition's tournaments unsealed, `reveal`'s
+/// mazes shown.
+async fn open_results(
+    tx: &mut sqlx::Transaction<'_, sqlx::Any>,
+    competition_id: i64,
+    reveal: &[i64],
+) -> Result<()> {
+    sqlx::query("update tournament set sealed = 0 where competition_id = $1")
+        .bind(competition_id)
+        .execute(&mut **tx)
+        .await?;
+    for maze_id in reveal {
+        sqlx::query("update maze set hidden = 0 where maze_id = $1")
+            .bind(maze_id)
+            .execute(&mut **tx)
+            .await?;
     }
     Ok(())
 }

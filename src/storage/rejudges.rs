@@ -157,7 +157,7 @@ impl Storage {
         .await?;
         // Results that counted a rejudged match are withdrawn until it is played again.
         let deciding = c.final_tournament_id.or(c.private_tournament_id);
-        if let (Some("final"), Some(t)) = (c.state.as_deref(), deciding) {
+        if let (Some("final" | "held"), Some(t)) = (c.state.as_deref(), deciding) {
             let touched: i64 = sqlx::query_scalar(&format!(
                 "select count(*) from match where tournament_id = $2 and match_id in ({mine})"
             ))

@@ -6,6 +6,7 @@
 //! the CLI writes the standalone viewer to a file. The viewer's script and styles are
 //! embedded in the binary: no page loads anything from the network.
 
+pub mod finale;
 pub mod layout;
 pub mod pages;
 pub mod policy;

@@ -8,7 +8,7 @@ use base64::Engine;
 use sha2::{Digest, Sha256};
 
 /// The texts of every inline script of the pages.
-pub fn inline_scripts() -> [&'static str; 6] {
+pub fn inline_scripts() -> [&'static str; 7] {
     [
         super::pages::PROGRESS_JS,
         super::pages::account::SUBMIT_FORM_JS,
@@ -16,15 +16,17 @@ pub fn inline_scripts() -> [&'static str; 6] {
         super::pages::MATCH_STDERR_JS,
         super::pages::OWNER_LOGS_JS,
         super::viewer::VIEWER_JS,
+        super::finale::FINALE_JS,
     ]
 }
 
 /// The texts of every inline style of the pages.
-pub fn inline_styles() -> [&'static str; 3] {
+pub fn inline_styles() -> [&'static str; 4] {
     [
         super::layout::SITE_CSS,
         super::viewer::VIEWER_CSS,
         crate::engine::render::SVG_STYLE,
+        super::finale::FINALE_CSS,
     ]
 }
 

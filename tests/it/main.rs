@@ -14,6 +14,7 @@ mod contain;
 mod crowd;
 mod deploy;
 mod faults;
+mod finale;
 mod hostile;
 mod load;
 mod mazefiles;

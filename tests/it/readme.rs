@@ -336,7 +336,7 @@ async fn the_readme_competition_example_runs_as_written() {
     let mut blocks = blocks("Running a competition");
     assert_eq!(blocks.len(), 2, "{blocks:?}");
     blocks.extend(self::blocks("Closing a competition"));
-    assert_eq!(blocks.len(), 4, "{blocks:?}");
+    assert_eq!(blocks.len(), 5, "{blocks:?}");
     let run = |block: &str| sh(&work, &block.replace("localhost:8080", &addr), &[]);
     // The mazes and the competition, from its file.
     run(&blocks[0]);
@@ -452,6 +452,16 @@ async fn the_readme_competition_example_runs_as_written() {
         3,
         "the entrants and the CLI's and the API's CSV: {out}"
     );
+    // The final night's offline files: the reveal of both entrants and the race of both
+    // on a private maze, each one HTML file with its data inside.
+    let out = run(&blocks[4]);
+    assert!(out.contains("the reveal of 2 entrants"), "{out}");
+    assert!(out.contains("2 robots on private-1 (seed 1)"), "{out}");
+    for file in ["maze-cup-reveal.html", "maze-cup-race.html"] {
+        let html = std::fs::read_to_string(work.join(file)).unwrap();
+        assert!(html.contains("id=\"finale-data\""), "{file}");
+        assert!(!html.contains("src=\"http"), "{file} loads nothing");
+    }
     // The export makes the same competition again on another database.
     let again = sh(
         &work,
@@ -474,6 +484,8 @@ fn what_the_readme_examples_write_is_ignored_by_git() {
         "mazearena-data/bots/x",
         "maze-cup/mazes/public-1.txt",
         "maze-cup-export/competition.toml",
+        "maze-cup-reveal.html",
+        "maze-cup-race.html",
         "maze-16.txt",
         "maze-16.svg",
         "tournament.db",

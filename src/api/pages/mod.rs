@@ -29,6 +29,7 @@ mod account;
 mod board;
 mod class;
 mod competitions;
+mod finale;
 mod forms;
 mod organise;
 
@@ -69,6 +70,7 @@ pub(super) fn router() -> Router<AppState> {
             ),
         )
         .merge(organise::router())
+        .merge(finale::router())
         .merge(class::router())
         .layer(axum::middleware::from_fn(super::session::refuse_cross_site))
 }

@@ -269,6 +269,11 @@ async fn manage_data(
         },
         closed: phase.is_closed(),
         final_results: c.state.as_deref() == Some("final"),
+        results_state: match c.state.as_deref() {
+            Some(s @ ("held" | "final")) => s.to_string(),
+            _ => String::new(),
+        },
+        hold_results: c.hold_results,
         opens_at: rfc(c.opens_at),
         closes_at: rfc(c.closes_at),
         freeze_hours: c
@@ -323,6 +328,10 @@ enum Done {
     PracticeAdded,
     /// A practice maze was removed.
     PracticeRemoved,
+    /// The results will be held for the reveal.
+    Held,
+    /// The held results were published.
+    Published,
 }
 
 /// The manage page's query: what the last form did (a fixed word, never text to show).
@@ -363,6 +372,12 @@ async fn manage_page(
                 .to_string(),
         ),
         Some(Done::InviteRemoved) => Some("The invite code is removed.".to_string()),
+        Some(Done::Held) => Some(
+            "Saved: the results will be held for the reveal until you publish them.".to_string(),
+        ),
+        Some(Done::Published) => Some(
+            "Published: everyone sees the results, the reveal and the races.".to_string(),
+        ),
         Some(Done::PracticeAdded) => Some(
             "The practice maze is added: entrants practise on it, and new versions are validated on the practice mazes in order."
                 .to_string(),

@@ -85,11 +85,12 @@ fn phase_badge(c: &CompetitionSummary) -> Markup {
     let word = match c.state.as_deref() {
         Some("final") => "final",
         Some("final_run") => "final run",
+        Some("held") => "results held",
         _ => c.phase.as_str(),
     };
     let class = match word {
         "open" => "ready",
-        "frozen" | "final run" => "building",
+        "frozen" | "final run" | "results held" => "building",
         "final" => "finished",
         _ => "queued",
     };
@@ -174,7 +175,9 @@ pub fn competition(p: &CompetitionPage) -> String {
         }
         @if let Some(rows) = &p.results {
             h2 { "Final results" }
-            p { a href={ "/api/competitions/" (c.name) "/results.csv" } { "CSV" } " · "
+            p { a.reveal-link href={ "/competitions/" (c.name) "/reveal" } { "The reveal" } " (from the last place to the first) · "
+                a.races-link href={ "/competitions/" (c.name) "/race" } { "The races" } " (every robot on one maze) · "
+                a href={ "/api/competitions/" (c.name) "/results.csv" } { "CSV" } " · "
                 a href={ "/api/competitions/" (c.name) "/results" } { "JSON with manifests" } }
             table.data.results {
                 thead { tr { th.num { "rank" } th { "entrant" } th { "bot" } th.num { "version" } th.num { "mean score" } (ranks::header_cells()) th.num { "finished" } } }

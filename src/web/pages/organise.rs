@@ -74,6 +74,10 @@ pub struct ManagePage {
     pub closed: bool,
     /// Whether its results are written.
     pub final_results: bool,
+    /// `held` (written, the organisers' only), `final` (published) or empty (none yet).
+    pub results_state: String,
+    /// Whether the results wait for the organisers to publish them.
+    pub hold_results: bool,
     /// Times as RFC 3339 (for the form) and in words.
     pub opens_at: String,
     /// The close.
@@ -136,10 +140,43 @@ pub fn manage(p: &ManagePage) -> String {
         }
         h2 { "Downloads" }
         ul.downloads {
-            @if p.final_results {
+            @if p.final_results || p.results_state == "held" {
                 li { a.results-csv href={ "/api/competitions/" (p.name) "/results.csv" } { "results.csv" } " (the final results)" }
             } @else { li.muted { "results.csv comes with the results, after the close and the final run" } }
             li { a.export href={ "/competitions/" (p.name) "/export.tar.gz" } { "the competition as a folder (.tar.gz)" } ": its file and every maze, private ones included" }
+        }
+        h2 { "The final night" }
+        @match p.results_state.as_str() {
+            "held" => {
+                p.results-held { "The results are written and held: only you see them. Rehearse the reveal on the projector, then publish them; the class learns them from the reveal." }
+                ul.finale-links {
+                    li { a.reveal-link href=(action("reveal")) { "The reveal" } " (from the last place to the first)" }
+                    li { a.races-link href=(action("race")) { "The races" } " (every robot on one maze)" }
+                }
+                form.stacked.publish method="post" action=(action("publish")) {
+                    (csrf_field(&p.csrf))
+                    label.check { input type="checkbox" name="confirm" value="yes" required; " I understand: everyone sees the results, the reveal and the races from now on." }
+                    button.danger type="submit" { "Publish the results" }
+                }
+            }
+            "final" => {
+                p { "The results are published." }
+                ul.finale-links {
+                    li { a.reveal-link href=(action("reveal")) { "The reveal" } }
+                    li { a.races-link href=(action("race")) { "The races" } }
+                }
+            }
+            _ => {
+                p.muted { "After the final run: the reveal (from the last place to the first) and the races of every robot on one maze. Hold the results to reveal them to the class yourself." }
+                form.inline.hold method="post" action=(action("hold")) {
+                    (csrf_field(&p.csrf))
+                    label { "When the results are written " select name="hold_results" {
+                        option value="no" selected[!p.hold_results] { "publish them at once" }
+                        option value="yes" selected[p.hold_results] { "hold them until I publish them" }
+                    } }
+                    button type="submit" { "Save" }
+                }
+            }
         }
         h2 { "Invite code" }
         @if !p.closed {
