@@ -127,6 +127,11 @@ log "the sandbox's cost per match"
     echo "(not measured: perf is not installed)"
   fi
   echo
+  echo "\`bash benches/oneshot_floor.sh\`: bubblewrap's bare start beside the least view any bot runs"
+  echo "in and a one-shot match's whole view, each around \`/usr/bin/true\`."
+  echo
+  bash benches/oneshot_floor.sh
+  echo
 } >>"$out"
 
 log "HTTP under load"

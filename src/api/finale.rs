@@ -176,6 +176,24 @@ pub(crate) async fn tournament_race(
     if !caller.sees_tournament(state, &t).await? {
         return Err(ApiError::NotFound(format!("no tournament {id}")));
     }
+    // A competition's tournament races by the competition's rules (its results first,
+    // the versions that counted, its hidden mazes its organisers' only).
+    if let Some(c) = t.competition_id {
+        let c = state
+            .storage
+            .get_competition_by_id(c)
+            .await?
+            .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+        let name = state
+            .storage
+            .competition_mazes(c.competition_id)
+            .await?
+            .into_iter()
+            .find(|m| m.maze_id == maze_id)
+            .map(|m| m.name)
+            .ok_or_else(|| ApiError::NotFound(format!("tournament {id} has no maze {maze_id}")))?;
+        return Ok(finale::race(&state.storage, &c, caller.organises(&c), &name, repeat).await?);
+    }
     let hidden = state
         .storage
         .get_maze(maze_id)

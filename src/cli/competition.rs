@@ -124,10 +124,10 @@ pub enum CompetitionCommand {
     Race {
         /// The competition's name.
         name: String,
-        /// The maze's name in the competition.
+        /// The maze's name in the competition (or its id).
         #[arg(long)]
         maze: String,
-        /// The repeat index (one seed), from 0.
+        /// Which of the set's seeds, from 0.
         #[arg(long, default_value_t = 0)]
         repeat: i64,
         /// The file to write.

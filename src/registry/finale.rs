@@ -421,7 +421,7 @@ fn urlencoding_path(name: &str) -> String {
     out
 }
 
-/// The race of `c`'s entrants on its maze named `maze`, repeat `repeat`: the final run's
+/// The race of `c`'s entrants on its maze named `maze` (or of that id), repeat `repeat`: the final run's
 /// matches on a private maze, the public set's on a public one, of the version that
 /// counted for each entrant.
 ///
@@ -438,9 +438,17 @@ pub async fn race(
 ) -> Result<Race> {
     results_open(c, organiser)?;
     let mazes = storage.competition_mazes(c.competition_id).await?;
+    // By its name in the competition, else by its id.
     let Some(cm) = mazes
         .iter()
-        .find(|m| m.name == maze && m.maze_set != "practice")
+        .filter(|m| m.maze_set != "practice")
+        .find(|m| m.name == maze)
+        .or_else(|| {
+            let id = maze.parse::<i64>().ok()?;
+            mazes
+                .iter()
+                .find(|m| m.maze_id == id && m.maze_set != "practice")
+        })
     else {
         return Err(RegistryError::NotFound(format!(
             "competition {} has no ranking maze {maze:?}",

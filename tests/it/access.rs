@@ -15,7 +15,7 @@ use super::support::{ADMIN, TestServer, root, simple_bot_files};
 
 /// axe-core's script, or `None` (with the reason printed) when it is not installed,
 /// outside CI.
-fn axe_source(test: &str) -> Option<String> {
+pub(crate) fn axe_source(test: &str) -> Option<String> {
     let path = std::env::var_os("MAZEARENA_AXE")
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join("target/axe/node_modules/axe-core/axe.min.js"));
@@ -38,7 +38,7 @@ fn axe_source(test: &str) -> Option<String> {
 
 /// axe-core's violations on the page the browser shows: rule, impact and the first
 /// elements, one line each.
-async fn violations(b: &Browser, axe: &str, page: &str) -> Vec<String> {
+pub(crate) async fn violations(b: &Browser, axe: &str, page: &str) -> Vec<String> {
     b.client
         .execute(&format!("{axe}\n;return true;"), vec![])
         .await

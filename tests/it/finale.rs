@@ -188,6 +188,18 @@ async fn final_night() {
         assert_eq!(a.status, 403, "{path}: {}", a.body);
         assert!(!a.body.contains("finale-data"), "{path}");
     }
+    for key in [&entrant, &other] {
+        let session = web.login(key).await;
+        for path in [
+            "/competitions/night/reveal",
+            "/competitions/night/race/pub/0",
+            "/competitions/night/race/priv-a/0?download=1",
+        ] {
+            let a = web.get(path, Some(&session)).await;
+            assert_eq!(a.status, 403, "{path}: {}", a.body);
+            assert!(!a.body.contains("finale-data"), "{path}");
+        }
+    }
     let (s, results) = server
         .get("/api/competitions/night/results", Some(&organiser))
         .await;
@@ -382,11 +394,23 @@ async fn final_night() {
         .await
         .unwrap();
 
+    let axe = crate::access::axe_source("the_final_night");
+    let mut found = Vec::new();
+    if let Some(axe) = &axe {
+        found.extend(crate::access::violations(&b, axe, "the reveal").await);
+        b.open(&format!("{base}/competitions/night/race"), "main")
+            .await;
+        found.extend(crate::access::violations(&b, axe, "the races").await);
+    }
     b.open(
         &format!("{base}/competitions/night/race/priv-a/0"),
         ".fn-race",
     )
     .await;
+    if let Some(axe) = &axe {
+        found.extend(crate::access::violations(&b, axe, "a race").await);
+    }
+    assert!(found.is_empty(), "axe-core found:\n{}", found.join("\n"));
     race_to(&b, 0.45).await;
     b.screenshot("final-night-race").await;
     let standing = race_to_end(&b).await;
@@ -463,6 +487,31 @@ async fn final_night() {
         assert_eq!(s, 200, "{who}: {v}");
         assert_eq!(v["runners"].as_array().unwrap().len(), 12);
     }
+    // A competition's tournaments race by its rules: the public set's for anyone, the
+    // final run's on a hidden maze for its organisers only.
+    let (_, view) = server
+        .get("/api/competitions/night", Some(&organiser))
+        .await;
+    let public_t = view["public_tournament_id"].as_i64().unwrap();
+    let (s, v) = server
+        .get(
+            &format!("/api/tournaments/{public_t}/race/{}/0", maze_id("pub")),
+            None,
+        )
+        .await;
+    assert_eq!(s, 200, "{v}");
+    assert_eq!(v["runners"].as_array().unwrap().len(), 12);
+    let final_match = &race["runners"][0]["match_id"];
+    let (_, m) = server
+        .get(&format!("/api/matches/{final_match}"), Some(ADMIN))
+        .await;
+    let final_t = m["tournament_id"].as_i64().unwrap();
+    let path = format!("/api/tournaments/{final_t}/race/{}/0", private[0]);
+    let (s, v) = server.get(&path, None).await;
+    assert_eq!(s, 403, "{v}");
+    let (s, v) = server.get(&path, Some(&organiser)).await;
+    assert_eq!(s, 200, "{v}");
+    assert_eq!(v["runners"].as_array().unwrap().len(), 12);
     for path in [
         "/competitions/night/race/priv-a/0",
         "/competitions/night/race/priv-a/0?download=1",
@@ -652,4 +701,77 @@ async fn race_to_end(b: &Browser) -> Vec<String> {
         }
     }
     names
+}
+
+/// A tournament outside competitions races every bot on one of its mazes, for anyone
+/// who sees the tournament; not on a hidden maze.
+#[tokio::test]
+async fn a_tournaments_race_plays_every_bot_on_one_maze() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = TestServer::start(dir.path(), &["--jobs", "2"]);
+    let read = |p: &str| std::fs::read_to_string(crate::support::root().join(p)).unwrap();
+    let files = json!({
+        "dawdler.py": read("tests/fixtures/bots/dawdler.py"),
+        "simple_bot.py": read("bots/python/simple_bot.py"),
+        "mazebot.py": read("bots/python/mazebot.py"),
+    });
+    let mut bots = Vec::new();
+    for (name, args) in [("quick", "0 0"), ("slow", "60 4"), ("slower", "0 9")] {
+        let body =
+            json!({"name": name, "command": format!("python3 dawdler.py {args}"), "files": files});
+        bots.push(crate::support::upload(&server, body).await.0);
+    }
+    let mut mazes = Vec::new();
+    for (name, hidden, seed) in [("open-12", false, 77), ("secret-12", true, 78)] {
+        let layout = numeric::write(&generate(12, seed).unwrap());
+        let body = json!({"name": name, "hidden": hidden, "layout": layout});
+        let (s, m) = server.post("/api/mazes", body, Some(ADMIN)).await;
+        assert_eq!(s, 201, "{m}");
+        mazes.push(m["maze_id"].as_i64().unwrap());
+    }
+    let body = json!({"name": "race-cup", "bot_ids": bots, "maze_ids": mazes, "repeats": 1});
+    let (s, t) = server.post("/api/tournaments", body, Some(ADMIN)).await;
+    assert_eq!(s, 202, "{t}");
+    let id = t["tournament_id"].as_i64().unwrap();
+    wait_for(&server, &format!("/api/tournaments/{id}"), None, |v| {
+        v["done"].is_i64() && v["done"] == v["total"]
+    })
+    .await;
+    let path = |maze: i64, repeat: i64| format!("/api/tournaments/{id}/race/{maze}/{repeat}");
+    let (s, race) = server.get(&path(mazes[0], 0), None).await;
+    assert_eq!(s, 200, "{race}");
+    let runners = race["runners"].as_array().unwrap();
+    assert_eq!(runners.len(), 3, "{race}");
+    // Best first, by the exact score from each match's record.
+    let mut scores = Vec::new();
+    for r in runners {
+        let (_, m) = server
+            .get(&format!("/api/matches/{}", r["match_id"]), None)
+            .await;
+        assert_eq!(r["score30"].as_i64(), score30(&m), "{m}");
+        scores.push(score30(&m).unwrap());
+    }
+    assert!(scores.windows(2).all(|w| w[0] <= w[1]), "{scores:?}");
+    let names: Vec<&str> = runners
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["quick", "slow", "slower"]);
+    let (s, v) = server.get(&path(mazes[1], 0), None).await;
+    assert_eq!(s, 403, "a hidden maze's race: {v}");
+    let (s, v) = server.get(&path(mazes[1], 0), Some(ADMIN)).await;
+    assert_eq!(s, 200, "{v}");
+    let (s, v) = server.get(&path(mazes[0], 5), None).await;
+    assert_eq!(s, 404, "{v}");
+    let (s, page) = server.get_text(&format!("/tournaments/{id}")).await;
+    assert_eq!(s, 200);
+    let link = |maze: i64| format!("/tournaments/{id}/race/{maze}/0");
+    assert!(page.contains(&link(mazes[0])), "the page links its race");
+    assert!(
+        !page.contains(&link(mazes[1])),
+        "no race link on a hidden maze"
+    );
+    let (s, page) = server.get_text(&link(mazes[0])).await;
+    assert_eq!(s, 200);
+    assert!(page.contains("id=\"finale-data\""));
 }

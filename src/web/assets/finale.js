@@ -54,7 +54,8 @@
     var frame = 0, playing = false, speed = 20, acc = 0, lastT = 0, raf = 0;
 
     var box = el('section', { 'class': 'fn-race', 'aria-label': 'Race: ' + race.title }, host);
-    el('h2', { 'class': 'fn-race-title' }, box, race.title);
+    var level = opts.level || 1;
+    el('h' + level, { 'class': 'fn-race-title' }, box, race.title);
     var sub = el('p', { 'class': 'fn-sub' }, box, runners.length + (runners.length === 1 ? ' robot' : ' robots') + ', one seed (' + race.seed + ')' +
       (race.optimal ? '; the optimal run 1 takes ' + race.optimal.steps + ' steps' : ''));
     if (race.organiser_copy) el('p', { 'class': 'fn-warn' }, box, 'This maze is one the competition keeps hidden: an organiser\u2019s copy, not to be shared.');
@@ -81,7 +82,7 @@
     trailBox.checked = true;
     trailLabel.appendChild(document.createTextNode(' Trails'));
     var side = el('div', { 'class': 'fn-side' }, body);
-    el('h3', null, side, 'Standing');
+    el('h' + (level + 1), null, side, 'Standing');
     var standing = el('ol', { 'class': 'fn-standing', 'aria-live': 'polite' }, side);
     var legend = el('details', { 'class': 'fn-legend' }, side);
     el('summary', null, legend, 'Robots and colours');
@@ -307,7 +308,7 @@
       if (!race) return;
       stopAuto();
       dHost.textContent = '';
-      player = RacePlayer(dHost, race, { autoplay: true });
+      player = RacePlayer(dHost, race, { autoplay: true, level: 2 });
       if (dialog.showModal) dialog.showModal(); else dialog.setAttribute('open', '');
     }
     function cardFor(group) {

@@ -307,6 +307,15 @@ pub fn tournament(p: &TournamentPage) -> String {
                     }
                 }
             }
+            @if t.done >= t.total && t.total > 0 {
+                tfoot { tr {
+                    th scope="row" { "every bot on one maze" }
+                    @for (maze_id, name) in &p.mazes {
+                        @let hidden = p.cells.iter().any(|((_, m), c)| m == maze_id && c.hidden);
+                        td.num { @if !hidden { a.race-link href={ "/tournaments/" (t.tournament_id) "/race/" (maze_id) "/0" } aria-label={ "The race on " (name) } { "race" } } }
+                    }
+                } }
+            }
         }
         p { a href={ "/matches?tournament_id=" (t.tournament_id) } { "Every match" } }
         script { (PreEscaped(PROGRESS_JS)) }
