@@ -134,6 +134,21 @@ log "the sandbox's cost per match"
   echo
 } >>"$out"
 
+log "a race of 100 robots in Chromium"
+{
+  echo "## A race of 100 robots in Chromium"
+  echo
+  echo "\`bash benches/race.sh 100\`: a tournament of 100 bots on one 16 x 16 maze, its race as one offline"
+  echo "file, beside the same file with one robot (the baseline); the script's header says what each holds."
+  echo
+  if command -v chromedriver >/dev/null 2>&1; then
+    bash benches/race.sh 100
+  else
+    echo "(not measured: chromedriver is not installed)"
+  fi
+  echo
+} >>"$out"
+
 log "HTTP under load"
 { bash benches/http.sh "${HTTP_ARGS[@]}"; echo; } >>"$out"
 
