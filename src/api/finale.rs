@@ -2,6 +2,8 @@
 //! (who may see what is [`crate::registry::finale`]'s, once; the pages call the same
 //! functions).
 
+use std::sync::Arc;
+
 use axum::extract::State;
 use serde::Serialize;
 use utoipa::ToSchema;
@@ -60,9 +62,16 @@ async fn publish_results(
 ///
 /// # Errors
 /// No such competition; its results not open to the caller.
-pub(crate) async fn reveal(state: &AppState, caller: &Caller, name: &str) -> ApiResult<Reveal> {
+pub(crate) async fn reveal(
+    state: &AppState,
+    caller: &Caller,
+    name: &str,
+) -> ApiResult<Arc<Reveal>> {
     let c = find(state, name).await?;
-    Ok(finale::reveal(&state.storage, &c, caller.organises(&c)).await?)
+    Ok(state
+        .shows
+        .reveal(&state.storage, &c, caller.organises(&c))
+        .await?)
 }
 
 /// The final results for a reveal, last place to first: each entrant's final rank (ties
@@ -78,7 +87,9 @@ async fn get_reveal(
     caller: Caller,
     AppPath(name): AppPath<String>,
 ) -> ApiResult<axum::Json<Reveal>> {
-    Ok(axum::Json(reveal(&state, &caller, &name).await?))
+    Ok(axum::Json(Reveal::clone(
+        &*reveal(&state, &caller, &name).await?,
+    )))
 }
 
 /// The races of a competition a caller may watch.
@@ -132,9 +143,12 @@ pub(crate) async fn race(
     name: &str,
     maze: &str,
     repeat: i64,
-) -> ApiResult<Race> {
+) -> ApiResult<Arc<Race>> {
     let c = find(state, name).await?;
-    Ok(finale::race(&state.storage, &c, caller.organises(&c), maze, repeat).await?)
+    Ok(state
+        .shows
+        .race(&state.storage, &c, caller.organises(&c), maze, repeat)
+        .await?)
 }
 
 /// Every entrant's match on one maze and seed of a competition (the version that
@@ -150,9 +164,9 @@ async fn get_race(
     caller: Caller,
     AppPath((name, maze, repeat)): AppPath<(String, String, i64)>,
 ) -> ApiResult<axum::Json<Race>> {
-    Ok(axum::Json(
-        race(&state, &caller, &name, &maze, repeat).await?,
-    ))
+    Ok(axum::Json(Race::clone(
+        &*race(&state, &caller, &name, &maze, repeat).await?,
+    )))
 }
 
 /// Tournament `id`'s race on maze `maze_id`, repeat `repeat`, as `caller` may see it: a
@@ -167,7 +181,7 @@ pub(crate) async fn tournament_race(
     id: i64,
     maze_id: i64,
     repeat: i64,
-) -> ApiResult<Race> {
+) -> ApiResult<Arc<Race>> {
     let t = state
         .storage
         .get_tournament(id)
@@ -192,7 +206,10 @@ pub(crate) async fn tournament_race(
             .find(|m| m.maze_id == maze_id)
             .map(|m| m.name)
             .ok_or_else(|| ApiError::NotFound(format!("tournament {id} has no maze {maze_id}")))?;
-        return Ok(finale::race(&state.storage, &c, caller.organises(&c), &name, repeat).await?);
+        return Ok(state
+            .shows
+            .race(&state.storage, &c, caller.organises(&c), &name, repeat)
+            .await?);
     }
     let hidden = state
         .storage
@@ -208,7 +225,9 @@ pub(crate) async fn tournament_race(
             "maze {maze_id} is hidden: its races are its competition's organisers' only"
         )));
     }
-    Ok(finale::tournament_race(&state.storage, id, maze_id, repeat).await?)
+    Ok(Arc::new(
+        finale::tournament_race(&state.storage, id, maze_id, repeat).await?,
+    ))
 }
 
 /// Every bot's match of a tournament on one maze and seed, to be played together.
@@ -221,7 +240,7 @@ async fn get_tournament_race(
     caller: Caller,
     AppPath((id, maze_id, repeat)): AppPath<(i64, i64, i64)>,
 ) -> ApiResult<axum::Json<Race>> {
-    Ok(axum::Json(
-        tournament_race(&state, &caller, id, maze_id, repeat).await?,
-    ))
+    Ok(axum::Json(Race::clone(
+        &*tournament_race(&state, &caller, id, maze_id, repeat).await?,
+    )))
 }

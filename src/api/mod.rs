@@ -105,6 +105,8 @@ pub struct AppState {
     pub wake: Arc<Notify>,
     /// Ranks standings with their uncertainty, keeping the last tables.
     pub ranker: Arc<crate::registry::rankings::Ranker>,
+    /// The final night's reveals and races made lately (a few seconds).
+    pub shows: Arc<crate::registry::finale::Shows>,
     /// The runtimes bots may use here (found at start-up).
     pub runtimes: Arc<Vec<crate::runner::runtimes::RuntimeInfo>>,
 }

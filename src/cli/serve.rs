@@ -384,6 +384,7 @@ async fn serve(mut args: ServeArgs) -> anyhow::Result<()> {
         metrics: metrics.clone(),
         wake: wake.clone(),
         ranker: Default::default(),
+        shows: Default::default(),
         runtimes,
     };
 

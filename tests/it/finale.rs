@@ -446,6 +446,16 @@ async fn final_night() {
         )
         .await;
     assert_eq!(s, 409, "published once: {v}");
+    // The organiser's copy, made first, is never what anyone else is answered (the
+    // reveals and races are kept a few seconds, by who asks).
+    let (s, mine) = server
+        .get("/api/competitions/night/reveal", Some(&organiser))
+        .await;
+    assert_eq!((s, &mine["organiser_copy"]), (200, &json!(true)), "{mine}");
+    let (s, mine) = server
+        .get("/api/competitions/night/race/priv-a/0", Some(&organiser))
+        .await;
+    assert_eq!(s, 200, "{mine}");
     for (who, token) in [
         ("anonymous", None),
         ("an entrant", Some(entrant.as_str())),
