@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 secs=${1:-20}
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
-for target in maze_numeric maze_ascii protocol_line archive; do
+for target in maze_numeric maze_ascii protocol_line archive mms_command; do
   mkdir -p "$scratch/$target"
   echo "== fuzz $target ($secs s)"
   status=0

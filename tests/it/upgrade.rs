@@ -338,3 +338,48 @@ async fn a_database_of_release_0_2_0_keeps_its_ranking_as_the_default_competitio
     drop(server);
     assert_standings_equal_recount(&database, &[1]).await;
 }
+
+/// A committed migration is never edited again (a database migrated by it would refuse
+/// to open: sqlx checks each applied migration's checksum): each file's SHA-256 is the
+/// one `migrations/checksums.sha256` recorded when it was added, and every migration is
+/// recorded there. A change of schema is a new file, and a new line.
+#[test]
+fn every_committed_migration_is_unchanged() {
+    use sha2::{Digest, Sha256};
+    let dir = root().join("migrations");
+    let recorded = std::fs::read_to_string(dir.join("checksums.sha256")).unwrap();
+    let mut seen = std::collections::BTreeMap::new();
+    for line in recorded.lines().filter(|l| !l.trim().is_empty()) {
+        let (hash, path) = line.split_once("  ").expect("`HASH  PATH` lines");
+        seen.insert(path.to_string(), hash.to_string());
+    }
+    let mut files = Vec::new();
+    for backend in ["sqlite", "postgres"] {
+        for entry in std::fs::read_dir(dir.join(backend)).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "sql") {
+                files.push(format!(
+                    "{backend}/{}",
+                    path.file_name().unwrap().to_string_lossy()
+                ));
+            }
+        }
+    }
+    files.sort();
+    let listed: Vec<String> = seen.keys().cloned().collect();
+    assert_eq!(
+        files, listed,
+        "every migration, and only those, has its checksum recorded"
+    );
+    for file in files {
+        let text = std::fs::read(dir.join(&file)).unwrap();
+        let hash: String = Sha256::digest(&text)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        assert_eq!(
+            hash, seen[&file],
+            "{file} was edited after it was committed: add a new migration instead"
+        );
+    }
+}
