@@ -23,7 +23,7 @@ use crate::metrics::Metrics;
 use crate::registry::cache::{BundleCache, CachedBundle};
 use crate::runner::{self, BotSpec, Limits, MatchStatus};
 use crate::storage::Storage;
-use crate::storage::matches::ClaimedMatch;
+use crate::storage::matches::queue::ClaimedMatch;
 use crate::storage::workers::NewWorker;
 
 /// Default lease on a running match; renewed every third of it.

@@ -7,7 +7,8 @@ use utoipa::{IntoParams, ToSchema};
 use super::error::{ApiError, ApiResult};
 use super::matches::MatchView;
 use crate::runner::MatchState;
-use crate::storage::matches::{MatchFilter, MatchRow, Page};
+use crate::storage::matches::MatchRow;
+use crate::storage::matches::lists::{MatchFilter, Page};
 
 /// Filters and page of `GET /api/matches`.
 #[derive(Debug, Deserialize, IntoParams)]

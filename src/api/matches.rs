@@ -21,7 +21,8 @@ use super::lists::{MatchListQuery, MatchPage, next_before};
 use super::mazes::{find_maze, hidden_error};
 use crate::runner::MatchRecord;
 use crate::storage::bots::build_status;
-use crate::storage::matches::{MatchRow, QueueLimits, QueueRefusal};
+use crate::storage::matches::MatchRow;
+use crate::storage::matches::queue::{QueueLimits, QueueRefusal};
 use crate::storage::mazes::MazeRow;
 use crate::web::viewer::ViewerData;
 

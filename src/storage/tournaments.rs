@@ -2,7 +2,8 @@
 
 use sqlx::FromRow;
 
-use super::matches::{PRIORITY_TOURNAMENT, Page};
+use super::matches::PRIORITY_TOURNAMENT;
+use super::matches::lists::Page;
 use super::{Result, Storage, now_ms};
 
 /// A stored tournament with its progress.

@@ -320,7 +320,7 @@ async fn the_scalers_query_is_the_storages_and_counts_on_postgresql_as_a_read_on
     let query = trigger["metadata"]["query"].as_str().unwrap();
     assert_eq!(
         squeeze(query),
-        squeeze(mazearena::storage::matches::WORK_FOR_WORKERS),
+        squeeze(mazearena::storage::matches::queue::WORK_FOR_WORKERS),
         "the manifest's query is the storage's"
     );
     let target: f64 = trigger["metadata"]["targetQueryValue"]

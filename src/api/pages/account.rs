@@ -20,7 +20,7 @@ use super::forms::{
     read_token_form, see_other,
 };
 use crate::storage::bots::build_status;
-use crate::storage::matches::{MatchFilter, Page};
+use crate::storage::matches::lists::{MatchFilter, Page};
 use crate::web::pages::account;
 
 /// How many of the visitor's latest matches "me" lists.

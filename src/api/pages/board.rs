@@ -11,7 +11,7 @@ use super::super::error::{ApiError, ApiResult, AppQuery};
 use super::super::leaderboard::settled_for_caller;
 use super::RECENT;
 use crate::storage::leaderboard::{Scope, Standing};
-use crate::storage::matches::Page;
+use crate::storage::matches::lists::Page;
 use crate::web::pages::{self as web, SortKey, StandingsSection};
 
 /// Query of `/`.

@@ -21,7 +21,8 @@ use super::lists::{MatchListQuery, page};
 use crate::engine::{mazefile, render, solver};
 use crate::runner::{MatchRecord, MatchState, MatchStatus};
 use crate::storage::leaderboard::Scope;
-use crate::storage::matches::{MatchCount, MatchFilter, MatchRow, Page};
+use crate::storage::matches::MatchRow;
+use crate::storage::matches::lists::{MatchCount, MatchFilter, Page};
 use crate::web::pages::{self as web, MatchLine, MatchPager, Pager, SortKey};
 use crate::web::viewer::ViewerData;
 

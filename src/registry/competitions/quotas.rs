@@ -7,7 +7,7 @@ use crate::registry::{RegistryError, Result};
 use crate::storage::Storage;
 use crate::storage::bots::VersionQuota;
 use crate::storage::competitions::CompetitionRow;
-use crate::storage::matches::PracticeQuota;
+use crate::storage::matches::queue::PracticeQuota;
 
 /// An entrant's quota of versions in competition `c` at `now`.
 ///

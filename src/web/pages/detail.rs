@@ -8,7 +8,7 @@ use super::super::viewer::{ViewerData, embed};
 use super::board::{StandingsSection, standings_table};
 use super::lists::{MatchLine, count_text, match_table, opt};
 use crate::storage::bots::{BotRow, BotVersionRow};
-use crate::storage::matches::MatchCount;
+use crate::storage::matches::lists::MatchCount;
 use crate::storage::mazes::MazeRow;
 use crate::storage::tournaments::TournamentRow;
 
