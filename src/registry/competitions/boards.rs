@@ -1,9 +1,7 @@
 //! The boards (public and private) as a caller may see them, and the stored results
 //! with how sure each rank is.
 
-use super::settings::deciding_tournament;
-use super::settings::phase;
-use super::settings::timeline;
+use super::settings::{deciding_tournament, phase, timeline};
 use crate::competition::Timestamp;
 use crate::ranking::Mean;
 use crate::ranking::mean::ratio_3dp;

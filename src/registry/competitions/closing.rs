@@ -1,9 +1,7 @@
 //! The clock's work: ranking new versions, the final selection and run at the close,
 //! the results with their manifests, and their publishing.
 
-use super::settings::deciding_tournament;
-use super::settings::in_set;
-use super::settings::phase;
+use super::settings::{deciding_tournament, in_set, phase};
 use crate::competition::selection::{self, Candidate, Rule, VersionScore};
 use crate::ranking::mean::ratio_3dp;
 use crate::registry::{RegistryError, Result};
