@@ -75,13 +75,7 @@ enum T<'a> {
     Raw(&'a [u8], EntryType, u64, &'a [u8]),
 }
 
-fn header(
-    name: &[u8],
-    kind: EntryType,
-    size: u64,
-    mode: u32,
-    link: &[u8],
-) -> ::tar::Header {
+fn header(name: &[u8], kind: EntryType, size: u64, mode: u32, link: &[u8]) -> ::tar::Header {
     let mut h = ::tar::Header::new_gnu();
     {
         let old = h.as_old_mut();
@@ -168,10 +162,7 @@ fn zip(entries: &[Z]) -> Vec<u8> {
     w.finish().unwrap().into_inner()
 }
 
-fn unpack(
-    bytes: &[u8],
-    limits: &BundleLimits,
-) -> (Dest, Result<BundleSummary, BundleError>) {
+fn unpack(bytes: &[u8], limits: &BundleLimits) -> (Dest, Result<BundleSummary, BundleError>) {
     let d = dest();
     let r = unpack_archive(bytes, &d.dest, limits);
     (d, r)
