@@ -2,10 +2,12 @@
 //! time, end it. [`Session::exchange`] returns a [`Verdict`] per step, so the match loop
 //! in [`super::run_match`] stays a short loop over verdicts.
 
+mod limits;
+mod mms;
+mod waiting;
+
 use std::pin::Pin;
 use std::time::{Duration, Instant};
-
-use std::os::fd::AsFd;
 
 use tokio::io::AsyncWriteExt;
 use tokio::time::timeout_at;
@@ -18,24 +20,14 @@ use crate::engine::Action;
 use crate::engine::game::Sense;
 use crate::protocol::{EXCERPT_BYTES, ProtocolError, ServerMessage, excerpt};
 
-/// How often the whole-match limits are looked at while the bot thinks.
-const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
-
-/// How long an answer is waited for on the match's own thread, in `ppoll` on the bot's
-/// stdout and stderr, before the wait goes to the runtime. Most answers come within
-/// it: a step then costs the referee its four system calls (the sense's `write`, the
-/// wait, the answer's `read`, the CPU counter) and little else, where a wait through
-/// the runtime's reactor costs some 4,000 instructions more (docs/PERFORMANCE.md).
-/// Each match has a thread of its own ([`crate::worker`], `mazearena run`), so the
-/// wait holds up nothing else for long.
-const NEAR_WAIT: Duration = Duration::from_millis(2);
-
-/// The longest a match keeps its thread from the runtime's other tasks (a worker's
-/// lease renewal, a shutdown) while every answer comes within [`NEAR_WAIT`].
-const TURN_EVERY: Duration = Duration::from_millis(10);
-
 /// The start of the reason for a bot that stopped answering (rewritten with its exit
 /// status and last stderr line once it has ended).
+/// How often the whole-match limits are looked at while the bot thinks.
+/// The longest a match keeps its thread from the runtime's other tasks (a worker's
+/// lease renewal, a shutdown) while every answer comes within [`NEAR_WAIT`].
+pub(super) const TURN_EVERY: Duration = Duration::from_millis(10);
+pub(super) const WATCHDOG_PERIOD: Duration = Duration::from_millis(25);
+
 pub const CLOSED_STDOUT: &str = "the bot closed its stdout (or exited)";
 
 /// Added to a timeout at step 1: the usual cause is an answer left in an output buffer.
@@ -147,7 +139,7 @@ fn redacted(redact: &[(String, String)], line: String) -> String {
 }
 
 /// One step's answer being waited for: since when and under which limits.
-struct Ask {
+pub(super) struct Ask {
     since: Instant,
     step: u32,
     limit: Option<Duration>,
@@ -160,7 +152,7 @@ struct Ask {
 }
 
 /// How a wait for an answer ended.
-enum Waited {
+pub(super) enum Waited {
     /// The reply pipe holds what is next (or could not be read).
     Got(std::io::Result<framing::Next>),
     /// The step's deadline passed.
@@ -281,62 +273,6 @@ impl Session {
         }
     }
 
-    /// Plays one step with an mms mouse (docs/PROTOCOL-mms.md): the translator `mouse`
-    /// answers the mouse's commands (written back within the step's limit) until one of
-    /// them is the step's action. The whole conversation is the step's answer time.
-    pub async fn exchange_mms(
-        &mut self,
-        sense: &Sense,
-        mouse: &mut crate::protocol::mms::Mouse,
-    ) -> Verdict {
-        use crate::protocol::mms::Next;
-        let mut ask = self.ask(sense).await;
-        let mms_fault = |e: crate::protocol::mms::MmsError| {
-            Verdict::Fault(MatchStatus::ProtocolError, failure(e.0, sense.step))
-        };
-        let mut next = match mouse.begin(sense) {
-            Ok(n) => n,
-            Err(e) => return mms_fault(e),
-        };
-        loop {
-            next = match next {
-                Next::Act(action) => {
-                    return match self.answered(&ask) {
-                        Ok((answer_us, cpu_us)) => Verdict::Answer {
-                            action,
-                            answer_us,
-                            cpu_us,
-                            debug: None,
-                        },
-                        Err(verdict) => *verdict,
-                    };
-                }
-                Next::Write(mut text) => {
-                    text.push('\n');
-                    if let Err(e) = self.send_sense(text.as_bytes(), ask.deadline).await {
-                        let (status, failure) = write_failure(e, sense.step);
-                        return self.limit_or(Verdict::Fault(status, failure), sense.step);
-                    }
-                    Next::Read
-                }
-                Next::Read => {
-                    if let Err(verdict) = self.wait_line(&mut ask).await {
-                        return *verdict;
-                    }
-                    let line = self.replies.line();
-                    self.stderr
-                        .meter
-                        .add(line.len() as u64 + super::flood::MMS_LINE_WEIGHT);
-                    let text = String::from_utf8_lossy(line);
-                    match mouse.line(text.trim_end_matches('\r')) {
-                        Ok(n) => n,
-                        Err(e) => return mms_fault(e),
-                    }
-                }
-            };
-        }
-    }
-
     /// Starts timing the answer to `sense`: its limit, the CPU time it may use, and the
     /// wall-clock backstop.
     async fn ask(&mut self, sense: &Sense) -> Ask {
@@ -391,285 +327,6 @@ impl Session {
     /// Whether the match has passed its wall-clock ceiling.
     fn past_ceiling(&self) -> bool {
         self.match_deadline.is_some_and(|m| Instant::now() >= m)
-    }
-
-    /// Waits for the bot's next line under `ask`'s limits: `Ok` when the replies hold
-    /// it, else the verdict (a timeout, a crash, a line too long, a limit).
-    async fn wait_line(&mut self, ask: &mut Ask) -> Result<(), Box<Verdict>> {
-        let (since, limit, mark, factor, step) =
-            (ask.since, ask.limit, ask.mark, ask.factor, ask.step);
-        let waited = loop {
-            let waited = match self.wait_near(ask.deadline) {
-                Waited::Later => self.wait_through_runtime(ask.deadline).await,
-                waited => waited,
-            };
-            // The wall-clock backstop moves out with the CPU time the bot uses: a bot
-            // that thinks on a busy machine is not stopped by the clock.
-            if let (Waited::TimedOut, Some(l), true, false) =
-                (&waited, limit, self.cpu_counted, self.past_ceiling())
-            {
-                let used = self.cpu_used(mark);
-                let backstop = since + (l + Duration::from_micros(used)) * factor;
-                if Instant::now() < backstop {
-                    ask.deadline = self.within_match(Some(backstop));
-                    continue;
-                }
-            }
-            break waited;
-        };
-        if let Waited::Got(Ok(framing::Next::Line)) = waited {
-            return Ok(());
-        }
-        self.cpu_cap = None;
-        Err(Box::new(match waited {
-            Waited::Got(Ok(framing::Next::Line)) => unreachable!("returned above"),
-            Waited::Got(Ok(framing::Next::End)) => {
-                let reason = format!("{CLOSED_STDOUT} before answering step {step}");
-                self.fault_or_limit(MatchStatus::Crashed, reason, step)
-            }
-            Waited::Got(Ok(framing::Next::TooLong)) => {
-                protocol_fault(ProtocolError::LineTooLong, self.replies.partial(), step)
-            }
-            Waited::Got(Err(e)) => {
-                let reason = format!("reading the bot's stdout failed: {e}");
-                self.fault_or_limit(MatchStatus::Crashed, reason, step)
-            }
-            Waited::TimedOut | Waited::Later if self.past_ceiling() => {
-                let ceiling = self.limits.match_wall_clock().unwrap_or_default();
-                let used = self.process.cpu_us().map_or(0, |us| us / 1000);
-                let reason = format!(
-                    "the match lasted {} s of wall-clock time, its ceiling ({} x the {} s of \
-                     CPU time its limits allow + {} s), in which the bot used {} ms of CPU \
-                     time: it was waiting, not thinking (step {step} was being asked)",
-                    self.started.elapsed().as_secs(),
-                    super::MATCH_WALL_FACTOR,
-                    self.limits.most_cpu_time().unwrap_or_default().as_secs(),
-                    super::MATCH_WALL_SLACK.as_secs(),
-                    used
-                );
-                let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, step);
-                with_time_limit(verdict, "match_wall_clock", ceiling.as_millis() as u64)
-            }
-            Waited::TimedOut | Waited::Later => {
-                let what = if step == 1 { "startup" } else { "move" };
-                let ms = limit.map_or(0, |l| l.as_millis());
-                let mut reason = if self.cpu_counted {
-                    let used = self.cpu_used(mark) / 1000;
-                    format!(
-                        "no answer to step {step} within {} ms of wall-clock time, in which the bot \
-                         used {used} ms of CPU time: it was waiting, not thinking (an answer is \
-                         given up on after {WALL_BACKSTOP_FACTOR} x (the {what} limit of {ms} ms \
-                         + the CPU time used))",
-                        since.elapsed().as_millis()
-                    )
-                } else {
-                    format!("no answer to step {step} within the {what} limit of {ms} ms")
-                };
-                if step == 1 {
-                    reason.push_str(STARTUP_HINT);
-                }
-                let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, step);
-                with_time_limit(verdict, "wall_clock", since.elapsed().as_millis() as u64)
-            }
-            Waited::CpuOver(used, allowed) => self.cpu_fault(step, used, allowed, limit),
-            Waited::Limit(kind) => self.limit_fault(kind, step),
-        }))
-    }
-
-    /// Waits for the answer through the runtime (a bot that thinks), under `deadline`,
-    /// looking at the whole-match limits meanwhile. Never [`Waited::Later`].
-    async fn wait_through_runtime(&mut self, deadline: Option<Instant>) -> Waited {
-        if let Some(d) = deadline {
-            self.step_limit.as_mut().reset(d.into());
-        }
-        self.turned_at = Instant::now();
-        loop {
-            tokio::select! {
-                biased;
-                r = framing::next_reply(&mut self.replies, &mut self.stderr) => return Waited::Got(r),
-                () = self.step_limit.as_mut(), if deadline.is_some() => return Waited::TimedOut,
-                _ = self.watchdog.tick() => {
-                    if let Some(kind) = self.process.limit_hit() {
-                        return Waited::Limit(kind);
-                    }
-                    if let Some(over) = self.cpu_over() {
-                        return over;
-                    }
-                }
-            }
-        }
-    }
-
-    /// Writes the sense line: at once while the pipe has room (it always has, but for a
-    /// bot that does not read its stdin), else the rest through the runtime within the
-    /// step's deadline.
-    async fn send_sense(&mut self, line: &[u8], deadline: Option<Instant>) -> std::io::Result<()> {
-        let written = match nix::unistd::write(self.stdin.as_fd(), line) {
-            Ok(n) => n,
-            Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => 0,
-            Err(e) => return Err(e.into()),
-        };
-        if written == line.len() {
-            return Ok(());
-        }
-        let rest = &line[written..];
-        send_bytes(&mut self.stdin, rest, deadline.map(Into::into)).await
-    }
-
-    /// Waits for the answer on the match's own thread for at most [`NEAR_WAIT`] (and
-    /// not past `deadline`): `ppoll` on the bot's stdout and stderr, each ready pipe
-    /// read at once, stderr first, so what the bot wrote there before its answer goes
-    /// with this step (the kernel reports the stderr pipe ready no later than the stdout
-    /// pipe written after it; a bot writing stderr without end has it read 64 times in
-    /// a row at most before its answer is taken, as through the runtime).
-    fn wait_near(&mut self, deadline: Option<Instant>) -> Waited {
-        use nix::poll::{PollFd, PollFlags, ppoll};
-        let start = Instant::now();
-        let until = deadline.map_or(start + NEAR_WAIT, |d| d.min(start + NEAR_WAIT));
-        let mut stderr_in_a_row = 0;
-        loop {
-            if let Some(next) = self.replies.look() {
-                return Waited::Got(Ok(next));
-            }
-            let now = Instant::now();
-            if now >= self.watch_at {
-                self.watch_at = now + WATCHDOG_PERIOD;
-                if let Some(kind) = self.process.limit_hit() {
-                    return Waited::Limit(kind);
-                }
-                if let Some(over) = self.cpu_over() {
-                    return over;
-                }
-            }
-            if now >= until {
-                return match deadline {
-                    Some(d) if now >= d => Waited::TimedOut,
-                    _ => Waited::Later,
-                };
-            }
-            let wait = nix::sys::time::TimeSpec::from_duration(until - now);
-            let stderr_open = self.stderr.is_open();
-            let (stdout_ready, stderr_ready) = {
-                let mut fds = [
-                    PollFd::new(self.replies.pipe(), PollFlags::POLLIN),
-                    PollFd::new(self.stderr.pipe(), PollFlags::POLLIN),
-                ];
-                let watched = if stderr_open { 2 } else { 1 };
-                match ppoll(&mut fds[..watched], Some(wait), None) {
-                    Ok(_) | Err(nix::errno::Errno::EINTR) => {}
-                    Err(e) => return Waited::Got(Err(e.into())),
-                }
-                let ready = |fd: &PollFd| fd.any().unwrap_or(false);
-                (ready(&fds[0]), stderr_open && ready(&fds[1]))
-            };
-            if stderr_ready && stderr_in_a_row < framing::STDERR_READS_BEFORE_REPLY {
-                self.stderr.read_now();
-                stderr_in_a_row += 1;
-                continue;
-            }
-            stderr_in_a_row = 0;
-            if stdout_ready && let Err(e) = self.replies.read_now() {
-                return Waited::Got(Err(e));
-            }
-        }
-    }
-
-    /// CPU time the bot has used since the counter read `mark`, in µs.
-    fn cpu_used(&self, mark: u64) -> u64 {
-        self.process
-            .cpu_us()
-            .map_or(0, |now| now.saturating_sub(mark))
-            + self.stderr.meter.step_charge_us()
-    }
-
-    /// [`Waited::CpuOver`] if the step being waited for has used more CPU time than
-    /// it may.
-    fn cpu_over(&self) -> Option<Waited> {
-        let (mark, allowed) = self.cpu_cap?;
-        let used = self.cpu_used(mark);
-        (used > allowed).then_some(Waited::CpuOver(used, allowed))
-    }
-
-    /// The timeout of step `step`, which used `used` µs of CPU time where it might use
-    /// `allowed` (its `limit` and what was left of the bank).
-    fn cpu_fault(&self, step: u32, used: u64, allowed: u64, limit: Option<Duration>) -> Verdict {
-        let what = if step == 1 { "startup" } else { "move" };
-        let ms = limit.map_or(0, |l| l.as_millis() as u64);
-        let bank = if step == 1 {
-            String::new()
-        } else {
-            format!(
-                " and the {} ms left of the match's time bank",
-                self.bank_left_us / 1000
-            )
-        };
-        let reason = format!(
-            "step {step} used more than {} ms of CPU time ({} ms when stopped): over the {what} limit of {ms} ms{bank}",
-            allowed / 1000,
-            used / 1000
-        );
-        let verdict = self.fault_or_limit(MatchStatus::Timeout, reason, step);
-        with_time_limit(verdict, "cpu_time", allowed / 1000)
-    }
-
-    /// The step `ask` is answered now: its wall-clock and CPU time, its CPU time counted
-    /// against its limit and the bank.
-    fn answered(&mut self, ask: &Ask) -> Result<(u64, Option<u64>), Box<Verdict>> {
-        self.cpu_cap = None;
-        let (since, step, limit, allowed_us) = (ask.since, ask.step, ask.limit, ask.allowed_us);
-        let answer_us = since.elapsed().as_micros() as u64;
-        let cpu_now = self.process.cpu_us();
-        // The referee's time on a flood of the step's output is the bot's (`flood`).
-        let charge = self.stderr.meter.end_step();
-        let cpu_us = match (self.cpu_mark, cpu_now) {
-            (Some(before), Some(now)) => Some(now.saturating_sub(before) + charge),
-            _ => None,
-        };
-        // A counter that could not be read leaves the mark where it was: the next step
-        // is measured from the last reading, never from zero.
-        if cpu_now.is_some() {
-            self.cpu_mark = cpu_now;
-        }
-        // An answer that came after its CPU time ran out is late, however it was
-        // noticed: the same rule whenever the counter is read.
-        if let (Some(used), Some(allowed), true) = (cpu_us, allowed_us, self.cpu_counted) {
-            if used > allowed {
-                return Err(Box::new(self.cpu_fault(step, used, allowed, limit)));
-            }
-            if step > 1 {
-                let limit_us = limit.map_or(0, |l| l.as_micros() as u64);
-                self.bank_left_us = self
-                    .bank_left_us
-                    .saturating_sub(used.saturating_sub(limit_us));
-            }
-        }
-        Ok((answer_us, cpu_us))
-    }
-
-    /// The fault `status` at `step` because of `reason`, unless a limit hit explains it
-    /// better.
-    fn fault_or_limit(&self, status: MatchStatus, reason: String, step: u32) -> Verdict {
-        self.limit_or(Verdict::Fault(status, failure(reason, step)), step)
-    }
-
-    /// A limit hit explains a crash or a timeout better than the symptom does: the
-    /// limit's verdict if one was hit, else `verdict`.
-    fn limit_or(&self, verdict: Verdict, step: u32) -> Verdict {
-        match self.process.limit_hit() {
-            Some(kind) => self.limit_fault(kind, step),
-            None => verdict,
-        }
-    }
-
-    /// The verdict for a limit the bot went over at `step`.
-    pub fn limit_fault(&self, kind: LimitKind, step: u32) -> Verdict {
-        let (status, failure) = limit_failure(kind, &self.limits, step);
-        Verdict::Fault(status, failure)
-    }
-
-    /// The limit the bot has gone over, if any (for the check at the end of a match).
-    pub fn limit_hit(&self) -> Option<LimitKind> {
-        self.process.limit_hit()
     }
 
     /// Sends the end message (v1 bots), closes stdin, gives the bot [`EXIT_GRACE`] to exit, then
@@ -748,7 +405,7 @@ pub fn limit_failure(kind: LimitKind, limits: &Limits, step: u32) -> (MatchStatu
 
 /// `verdict` with the time limit that ended it named (`cpu_time` or `wall_clock`, in ms),
 /// unless a whole-match limit explained it first.
-fn with_time_limit(verdict: Verdict, name: &str, value_ms: u64) -> Verdict {
+pub(super) fn with_time_limit(verdict: Verdict, name: &str, value_ms: u64) -> Verdict {
     match verdict {
         Verdict::Fault(MatchStatus::Timeout, mut f) if f.limit.is_none() => {
             f.limit = Some(LimitHit {
@@ -762,7 +419,7 @@ fn with_time_limit(verdict: Verdict, name: &str, value_ms: u64) -> Verdict {
     }
 }
 
-fn failure(reason: String, step: u32) -> Failure {
+pub(super) fn failure(reason: String, step: u32) -> Failure {
     Failure {
         reason,
         step: Some(step),
@@ -770,7 +427,7 @@ fn failure(reason: String, step: u32) -> Failure {
     }
 }
 
-fn protocol_fault(e: ProtocolError, line: &[u8], step: u32) -> Verdict {
+pub(super) fn protocol_fault(e: ProtocolError, line: &[u8], step: u32) -> Verdict {
     let mut f = failure(e.to_string(), step);
     f.line = Some(excerpt(line, EXCERPT_BYTES));
     Verdict::Fault(MatchStatus::ProtocolError, f)
@@ -786,7 +443,7 @@ async fn send(
 }
 
 /// Writes `bytes` to the bot, within `deadline` if given.
-async fn send_bytes(
+pub(super) async fn send_bytes(
     stdin: &mut BotStdin,
     bytes: &[u8],
     deadline: Option<tokio::time::Instant>,
@@ -806,7 +463,7 @@ async fn send_bytes(
     }
 }
 
-fn write_failure(e: std::io::Error, step: u32) -> (MatchStatus, Failure) {
+pub(super) fn write_failure(e: std::io::Error, step: u32) -> (MatchStatus, Failure) {
     let status = if e.kind() == std::io::ErrorKind::TimedOut {
         MatchStatus::Timeout
     } else {
