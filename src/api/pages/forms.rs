@@ -249,3 +249,12 @@ pub(super) fn no_store(html: String) -> Response {
     );
     response
 }
+
+/// The session's anti-forgery token for a page's forms (empty without a session).
+pub(super) fn csrf(visitor: &Visitor) -> String {
+    visitor
+        .session
+        .as_ref()
+        .map(|s| s.csrf.clone())
+        .unwrap_or_default()
+}

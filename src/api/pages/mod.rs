@@ -27,6 +27,7 @@ use crate::web::pages::{self as web, MatchLine, MatchPager, Pager, SortKey};
 use crate::web::viewer::ViewerData;
 
 mod account;
+mod admin;
 mod board;
 mod class;
 mod competitions;
@@ -71,6 +72,7 @@ pub(super) fn router() -> Router<AppState> {
             ),
         )
         .merge(organise::router())
+        .merge(admin::router())
         .merge(finale::router())
         .merge(class::router())
         .layer(axum::middleware::from_fn(super::session::refuse_cross_site))
