@@ -129,7 +129,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     // One core for the referee and the bot (runner::affinity): the one we are on.
     crate::runner::affinity::pin_to_this_core();
     // The sandbox's orphans are ours to reap (see below), not the host's init's.
-    let reaps = runner::process::adopt_orphans().is_ok();
+    let reaps = runner::sandbox::proctree::adopt_orphans().is_ok();
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -175,7 +175,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         // waited for; what is left are ended orphans (bubblewrap's init), which would
         // hold the match's kept cgroup for the next run until the host's init reaped
         // them.
-        runner::process::reap_orphans();
+        runner::sandbox::proctree::reap_orphans();
     }
     verified?;
     let mut record = record;

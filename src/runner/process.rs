@@ -174,29 +174,6 @@ pub struct BotProcess {
     cpu_clock: std::sync::OnceLock<Option<nix::time::ClockId>>,
 }
 
-/// Makes this process the reaper of the orphans among its descendants
-/// (`PR_SET_CHILD_SUBREAPER`), for a runner of one match (`mazearena run`): bubblewrap
-/// exits without reaping its init, which would otherwise wait for the host's init,
-/// still counted by the match's cgroup. Call [`reap_orphans`] when the match is over.
-///
-/// # Errors
-/// The kernel refused it.
-pub fn adopt_orphans() -> nix::Result<()> {
-    nix::sys::prctl::set_child_subreaper(true)
-}
-
-/// Reaps every child of this process that has ended: for a process whose runtime waits
-/// for no child any more (`mazearena run` once its match is over), after
-/// [`adopt_orphans`].
-pub fn reap_orphans() {
-    use nix::sys::wait::{WaitPidFlag, WaitStatus, waitpid};
-    while let Ok(status) = waitpid(None, Some(WaitPidFlag::WNOHANG)) {
-        if status == WaitStatus::StillAlive {
-            break;
-        }
-    }
-}
-
 /// Starts the bot with piped stdin, stdout and stderr.
 ///
 /// # Errors

@@ -1,7 +1,8 @@
 //! A bot's processes seen through `/proc`, for where no cgroup can be made: the tree
 //! under the bot's outer process (in a PID namespace every orphan is adopted inside it,
 //! so nothing escapes the tree), with its total resident memory, thread count and CPU
-//! time. The watchdog compares them with the limits.
+//! time. The watchdog compares them with the limits. And the orphans a one-match runner
+//! adopts from bubblewrap and reaps.
 
 use std::collections::BTreeSet;
 
@@ -128,6 +129,29 @@ pub fn kill_tree(root: u32) {
         }
         if pids.len() == 1 {
             return;
+        }
+    }
+}
+
+/// Makes this process the reaper of the orphans among its descendants
+/// (`PR_SET_CHILD_SUBREAPER`), for a runner of one match (`mazearena run`): bubblewrap
+/// exits without reaping its init, which would otherwise wait for the host's init,
+/// still counted by the match's cgroup. Call [`reap_orphans`] when the match is over.
+///
+/// # Errors
+/// The kernel refused it.
+pub fn adopt_orphans() -> nix::Result<()> {
+    nix::sys::prctl::set_child_subreaper(true)
+}
+
+/// Reaps every child of this process that has ended: for a process whose runtime waits
+/// for no child any more (`mazearena run` once its match is over), after
+/// [`adopt_orphans`].
+pub fn reap_orphans() {
+    use nix::sys::wait::{WaitPidFlag, WaitStatus, waitpid};
+    while let Ok(status) = waitpid(None, Some(WaitPidFlag::WNOHANG)) {
+        if status == WaitStatus::StillAlive {
+            break;
         }
     }
 }
