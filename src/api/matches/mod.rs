@@ -10,7 +10,7 @@ mod replays;
 use super::AppState;
 use super::auth::Caller;
 use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
-use super::lists::{MatchListQuery, MatchPage, next_before};
+use super::lists::{MatchListQuery, MatchPage, MatchView, next_before};
 use super::mazes::{find_maze, hidden_error};
 use crate::storage::bots::build_status;
 use crate::storage::matches::MatchRow;
@@ -57,65 +57,6 @@ pub struct MatchQueued {
     pub bot_version: i64,
     /// The seed.
     pub seed: u32,
-}
-
-/// A match as anyone may see it.
-#[derive(Debug, Serialize, ToSchema)]
-pub struct MatchView {
-    /// Id.
-    pub match_id: i64,
-    /// The bot.
-    pub bot_id: i64,
-    /// The bot version that played.
-    pub bot_version: i64,
-    /// The maze.
-    pub maze_id: i64,
-    /// The tournament, if any.
-    pub tournament_id: Option<i64>,
-    /// The seed (null on a hidden maze's match, unless the caller is the admin: a
-    /// competition's seeds are secret until its results).
-    pub seed: Option<i64>,
-    /// queued, running, finished, step_limit, timeout, crashed, protocol_error,
-    /// memory_limit, process_limit, scratch_limit, aborted.
-    pub status: String,
-    /// Score when finished.
-    pub score: Option<f64>,
-    /// Run-0 steps (once a reset was accepted).
-    pub run0_steps: Option<i64>,
-    /// Run-1 steps (when finished).
-    pub run1_steps: Option<i64>,
-    /// The step counter when the match ended.
-    pub total_steps: Option<i64>,
-    /// How many times a worker started it.
-    pub attempts: i64,
-    /// Queued at (unix ms).
-    pub created_at: i64,
-    /// Last started at (unix ms).
-    pub started_at: Option<i64>,
-    /// Finished at (unix ms).
-    pub finished_at: Option<i64>,
-    /// Whether the maze is hidden: then `warnings`, `timings`, `maze_hash` and
-    /// `maze_dim` are null unless the caller is the admin.
-    pub maze_hidden: bool,
-    /// Lenient-rule warnings.
-    #[schema(value_type = Vec<Object>)]
-    pub warnings: Value,
-    /// The limits it was played under.
-    #[schema(value_type = Object)]
-    pub limits: Value,
-    /// SHA-256 of the maze layout.
-    pub maze_hash: Option<String>,
-    /// The maze's side.
-    pub maze_dim: Option<i64>,
-    /// The referee's version.
-    pub engine_version: Option<String>,
-    /// Wall time, bot CPU time, answer times.
-    #[schema(value_type = Object)]
-    pub timings: Value,
-    /// Earlier outcomes of this match that rejudges superseded (they no longer count),
-    /// oldest first; only in `GET /api/matches/{id}`.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub superseded: Vec<crate::storage::rejudges::SupersededRow>,
 }
 
 /// Queue a match of a bot's latest version on a maze (owner token or admin).
