@@ -123,9 +123,7 @@ impl Metrics {
                 self.inner.queue_depth.set(n);
             }
         }
-        let workers = storage
-            .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
-            .await?;
+        let workers = storage.live_workers(LIVE_WINDOW.as_millis() as i64).await?;
         self.inner.worker_jobs.clear();
         self.inner.worker_matches.clear();
         for w in workers {
@@ -147,3 +145,6 @@ impl Metrics {
         Ok(out)
     }
 }
+
+/// A worker not seen for this long is no longer shown as live.
+pub const LIVE_WINDOW: std::time::Duration = std::time::Duration::from_secs(30);

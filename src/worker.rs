@@ -73,9 +73,6 @@ pub fn report_interval(lease: Duration) -> Duration {
     (lease / 2).clamp(Duration::from_millis(200), Duration::from_secs(5))
 }
 
-/// A worker not seen for this long is no longer shown as live.
-pub const LIVE_WINDOW: Duration = Duration::from_secs(30);
-
 /// Signals that stop the workers.
 #[derive(Debug, Clone, Default)]
 pub struct Shutdown {

@@ -70,7 +70,7 @@ async fn healthz(State(state): State<AppState>, caller: Caller) -> ApiResult<axu
         let queued = state.storage.queued_count().await?;
         let workers = state
             .storage
-            .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
+            .live_workers(crate::metrics::LIVE_WINDOW.as_millis() as i64)
             .await?;
         (Some(queued), Some(workers))
     } else {

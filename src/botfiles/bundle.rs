@@ -9,27 +9,13 @@ use std::path::PathBuf;
 
 use sha2::{Digest, Sha256};
 
-use super::hash::content_hash;
+use super::hash::{Node, content_hash};
 use super::names::{has_drive_prefix, parents, parse_path};
 use super::staging::io_err;
 use super::{BundleError, BundleLimits, BundleSummary, MAX_PATH_BYTES};
 
 /// Deepest chain of symbolic links followed when checking a link (as Linux).
 const MAX_LINK_EXPANSIONS: usize = 40;
-
-pub(super) enum Node {
-    Dir {
-        explicit: bool,
-    },
-    File {
-        exec: bool,
-        size: u64,
-        sha: [u8; 32],
-    },
-    Symlink {
-        target: String,
-    },
-}
 
 /// The bundle being built in the staging directory.
 pub(super) struct Bundle {

@@ -4,8 +4,6 @@ use std::collections::BTreeMap;
 
 use sha2::{Digest, Sha256};
 
-use super::bundle::Node;
-
 /// The version tag at the start of the hashed byte string (see the module docs).
 const HASH_DOMAIN: &[u8] = b"mazearena-bundle-v1\n";
 
@@ -41,4 +39,18 @@ pub(super) fn hex(bytes: &[u8]) -> String {
         s.push(char::from(DIGITS[usize::from(b & 0xf)]));
     }
     s
+}
+
+pub(super) enum Node {
+    Dir {
+        explicit: bool,
+    },
+    File {
+        exec: bool,
+        size: u64,
+        sha: [u8; 32],
+    },
+    Symlink {
+        target: String,
+    },
 }

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
-use super::bundle::Node;
+use super::hash::Node;
 use super::hash::content_hash;
 use super::{BundleError, BundleLimits, BundleSummary};
 

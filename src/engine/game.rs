@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use super::geometry::{Heading, Position};
 use super::maze::Maze;
+use super::maze::slide;
 use super::score::Score;
-use super::solver::slide;
 
 /// The shared step budget of the task (RULES.md "Runs, time, score").
 pub const MAX_STEPS: u32 = 1000;

@@ -313,6 +313,24 @@ impl Maze {
     }
 }
 
+/// Where a movement of `movement` cells (negative: backwards) from `cell` facing
+/// `heading` ends, stopping at the first wall (RULES.md: "at a wall the robot stops
+/// where it is"), and whether a wall cut it short.
+pub fn slide(maze: &Maze, mut cell: Position, heading: Heading, movement: i64) -> (Position, bool) {
+    let dir = if movement >= 0 {
+        heading
+    } else {
+        heading.reverse()
+    };
+    for _ in 0..movement.unsigned_abs() {
+        match cell.step(dir, maze.dim()) {
+            Some(next) if maze.is_open(cell, dir) => cell = next,
+            _ => return (cell, true),
+        }
+    }
+    (cell, false)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use super::game::Action;
 use super::geometry::{Heading, Position};
 use super::maze::Maze;
+use super::maze::slide;
 
 /// An optimal run 1.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -79,22 +80,4 @@ pub fn solve(maze: &Maze) -> Option<Solution> {
 fn cell_of(state: usize, n: u32) -> Position {
     let c = (state / 4) as u32;
     Position::new(c / n, c % n)
-}
-
-/// Where a movement of `movement` cells (negative: backwards) from `cell` facing
-/// `heading` ends, stopping at the first wall (RULES.md: "at a wall the robot stops
-/// where it is"), and whether a wall cut it short.
-pub fn slide(maze: &Maze, mut cell: Position, heading: Heading, movement: i64) -> (Position, bool) {
-    let dir = if movement >= 0 {
-        heading
-    } else {
-        heading.reverse()
-    };
-    for _ in 0..movement.unsigned_abs() {
-        match cell.step(dir, maze.dim()) {
-            Some(next) if maze.is_open(cell, dir) => cell = next,
-            _ => return (cell, true),
-        }
-    }
-    (cell, false)
 }

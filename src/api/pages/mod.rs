@@ -344,7 +344,7 @@ struct ListQuery {
 async fn workers_page(State(state): State<AppState>) -> ApiResult<Html<String>> {
     let rows = state
         .storage
-        .live_workers(crate::worker::LIVE_WINDOW.as_millis() as i64)
+        .live_workers(crate::metrics::LIVE_WINDOW.as_millis() as i64)
         .await?;
     Ok(Html(web::workers(&rows)))
 }
