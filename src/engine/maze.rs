@@ -7,7 +7,6 @@
 
 use std::collections::VecDeque;
 
-use sha2::{Digest, Sha256};
 
 use super::geometry::{Heading, Position};
 
@@ -303,13 +302,6 @@ impl Maze {
             problems.push("no cell of the goal room can be reached from the start".to_string());
         }
         problems
-    }
-
-    /// The SHA-256 of the maze's canonical numeric text, as lowercase hex: the same
-    /// layout gives the same hash whichever file format it came from.
-    pub fn hash(&self) -> String {
-        let digest = Sha256::digest(super::mazefile::numeric::write(self).as_bytes());
-        digest.iter().map(|b| format!("{b:02x}")).collect()
     }
 }
 

@@ -162,6 +162,16 @@ pub fn write(maze: &Maze) -> String {
     out
 }
 
+impl Maze {
+    /// The SHA-256 of the maze's canonical numeric text ([`write`]), as lowercase hex:
+    /// the same layout gives the same hash whichever file format it came from.
+    pub fn hash(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let digest = Sha256::digest(write(self).as_bytes());
+        digest.iter().map(|b| format!("{b:02x}")).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
