@@ -7,7 +7,6 @@
 
 use std::collections::VecDeque;
 
-
 use super::geometry::{Heading, Position};
 
 /// The smallest side a maze may have (RULES.md edge cases: n even and >= 2).

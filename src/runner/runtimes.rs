@@ -15,8 +15,6 @@ use std::time::Duration;
 
 use serde::Serialize;
 
-use super::sandbox::Runtime;
-
 /// How long a program may take to say its version.
 const VERSION_TIMEOUT: Duration = Duration::from_secs(10);
 
@@ -269,6 +267,32 @@ fn node_package(dir: &Path, scope: Option<&str>) -> Option<Package> {
         name,
         version: v["version"].as_str().unwrap_or("").to_string(),
     })
+}
+
+/// One language runtime's installation, mounted read-only in every bot's view at its
+/// own path: an install prefix (a pyenv version, a venv, a Node prefix, a rustup
+/// toolchain, a JDK, a Go root), never a home folder or a folder holding dotfiles.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Runtime {
+    /// The install prefix (canonical).
+    pub prefix: PathBuf,
+    /// Why it is in the view, for `mazearena doctor`.
+    pub why: String,
+    /// The base interpreter of a listed venv: mounted, because the venv's programs run
+    /// it, but not a runtime of its own: not offered by name, not listed, not on the
+    /// bot's `PATH` (its site-packages are the operator's, not the venv's).
+    pub base_of_venv: bool,
+}
+
+impl Runtime {
+    /// An install folder mounted for bots and offered to them.
+    pub fn offered(prefix: PathBuf, why: impl Into<String>) -> Runtime {
+        Runtime {
+            prefix,
+            why: why.into(),
+            base_of_venv: false,
+        }
+    }
 }
 
 #[cfg(test)]

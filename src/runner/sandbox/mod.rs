@@ -105,7 +105,7 @@ pub struct FullSandbox {
     /// watchdog enforces them).
     pub cgroups: Result<cgroup::CgroupRoot, String>,
     /// The operator's runtimes (`--runtime`), mounted read-only in every bot's view.
-    pub runtimes: Vec<view::Runtime>,
+    pub runtimes: Vec<Runtime>,
     /// Whether the runtime of each bot's own program is found and mounted too (local
     /// runs, where the owner is the operator; never on a server).
     pub detect: bool,
@@ -525,8 +525,9 @@ pub fn find_program(name: &str) -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
+pub use crate::runner::runtimes::Runtime;
 pub(crate) use view::bwrap_args;
-pub use view::{Runtime, Work, listed_runtimes, real_program, runtime_of_program};
+pub use view::{Work, listed_runtimes, real_program, runtime_of_program};
 
 impl FullSandbox {
     /// The runtimes mounted for a bot or build whose program is `program`: the

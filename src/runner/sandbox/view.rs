@@ -4,6 +4,7 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 use super::{FullSandbox, HELPER_IN_SANDBOX, jail::SCRATCH};
+use crate::runner::runtimes::Runtime;
 
 /// Where a match's bot folder is mounted, read-only; its working directory links to
 /// each entry.
@@ -64,32 +65,6 @@ const SECRET_FILES: &[&str] = &[
     ".pypirc",
     ".netrc",
 ];
-
-/// One language runtime's installation, mounted read-only in every bot's view at its
-/// own path: an install prefix (a pyenv version, a venv, a Node prefix, a rustup
-/// toolchain, a JDK, a Go root), never a home folder or a folder holding dotfiles.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Runtime {
-    /// The install prefix (canonical).
-    pub prefix: PathBuf,
-    /// Why it is in the view, for `mazearena doctor`.
-    pub why: String,
-    /// The base interpreter of a listed venv: mounted, because the venv's programs run
-    /// it, but not a runtime of its own: not offered by name, not listed, not on the
-    /// bot's `PATH` (its site-packages are the operator's, not the venv's).
-    pub base_of_venv: bool,
-}
-
-impl Runtime {
-    /// An install folder mounted for bots and offered to them.
-    pub fn offered(prefix: PathBuf, why: impl Into<String>) -> Runtime {
-        Runtime {
-            prefix,
-            why: why.into(),
-            base_of_venv: false,
-        }
-    }
-}
 
 /// The environment of a bot in the sandbox, all of the runner's making: a `PATH` of its
 /// runtimes' `bin` folders and the system's, its scratch area as home and temporary

@@ -29,8 +29,9 @@ use std::time::{Duration, Instant};
 use super::ahead::CgroupsAhead;
 use super::cgroup::{CgroupLimits, MatchCgroup};
 use super::supervisor::{self, Reply, Request};
-use super::view::{self, Runtime, Work};
+use super::view::{self, Work};
 use super::{FullSandbox, SERVE_SUBCOMMAND};
+use crate::runner::runtimes::Runtime;
 
 /// Idle warm sandboxes kept at most: two per core, and at least 8; the oldest goes
 /// first.
