@@ -295,6 +295,49 @@ impl Runtime {
     }
 }
 
+/// Past a pyenv shim or a rustup proxy, the program that it runs: `pyenv which` and
+/// `rustup which` (the runner's own tools, asked about a file that is on its `PATH`),
+/// asked once a process for each program. A bot is started with the program itself
+/// with or without the sandbox: a shim's own start (a shell script and `pyenv exec`,
+/// some 50 ms) is not in a match's time either way.
+pub fn real_program(found: &Path, name: &str) -> PathBuf {
+    type Known = std::sync::Mutex<std::collections::HashMap<(PathBuf, String), PathBuf>>;
+    static KNOWN: std::sync::OnceLock<Known> = std::sync::OnceLock::new();
+    let known = KNOWN.get_or_init(Default::default);
+    let key = (found.to_path_buf(), name.to_string());
+    if let Some(real) = known.lock().ok().and_then(|k| k.get(&key).cloned()) {
+        return real;
+    }
+    let real = ask_manager(found, name);
+    if let Ok(mut k) = known.lock() {
+        k.insert(key, real.clone());
+    }
+    real
+}
+
+/// [`real_program`], asked of the version manager.
+fn ask_manager(found: &Path, name: &str) -> PathBuf {
+    let dir = found.parent().unwrap_or(Path::new("/"));
+    let manager = if dir.ends_with("shims") {
+        dir.parent().map(|root| root.join("bin/pyenv"))
+    } else {
+        Some(dir.join("rustup")).filter(|r| r.is_file())
+    };
+    let Some(manager) = manager.filter(|m| m.is_file()) else {
+        return found.to_path_buf();
+    };
+    std::process::Command::new(&manager)
+        .args(["which", name])
+        .stdin(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()))
+        .filter(|p| p.is_file())
+        .unwrap_or_else(|| found.to_path_buf())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -526,8 +526,9 @@ pub fn find_program(name: &str) -> Option<PathBuf> {
 }
 
 pub use crate::runner::runtimes::Runtime;
+pub use crate::runner::runtimes::real_program;
 pub(crate) use view::bwrap_args;
-pub use view::{Work, listed_runtimes, real_program, runtime_of_program};
+pub use view::{Work, listed_runtimes, runtime_of_program};
 
 impl FullSandbox {
     /// The runtimes mounted for a bot or build whose program is `program`: the
