@@ -34,6 +34,7 @@ mod competitions;
 mod finale;
 mod forms;
 mod organise;
+mod submit;
 
 /// How many tournaments the leaderboard lists, and recent matches a bot or maze page.
 const RECENT: i64 = 20;
@@ -67,7 +68,7 @@ pub(super) fn router() -> Router<AppState> {
         .route("/me/key", post(account::rotate_key))
         .route(
             "/competitions/{name}/submit",
-            get(account::submit_page).post(account::submit).layer(
+            get(submit::submit_page).post(submit::submit).layer(
                 axum::extract::DefaultBodyLimit::max(super::MAX_UPLOAD_BYTES),
             ),
         )
