@@ -6,6 +6,7 @@ mod competition;
 mod matches;
 mod maze;
 mod migrate;
+mod pool;
 mod prune;
 mod replay;
 mod report;

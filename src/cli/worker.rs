@@ -11,7 +11,8 @@ use clap::Args;
 use tokio::sync::Notify;
 use tokio_util::task::TaskTracker;
 
-use super::serve::{PoolArgs, finish, hidden_paths, wait_for_signal};
+use super::pool::PoolArgs;
+use super::serve::{finish, hidden_paths, wait_for_signal};
 use crate::worker::{self, Shutdown};
 
 /// Settings of `mazearena worker`; every flag can also come from its `MAZEARENA_*` variable.
