@@ -225,9 +225,10 @@ pub(crate) async fn tournament_race(
             "maze {maze_id} is hidden: its races are its competition's organisers' only"
         )));
     }
-    Ok(Arc::new(
-        finale::tournament_race(&state.storage, id, maze_id, repeat).await?,
-    ))
+    Ok(state
+        .shows
+        .tournament_race(&state.storage, id, maze_id, repeat)
+        .await?)
 }
 
 /// Every bot's match of a tournament on one maze and seed, to be played together.

@@ -249,8 +249,7 @@ impl Maze {
 
     /// Whether `cell` is one of the goal room's cells.
     pub fn is_goal(&self, cell: Position) -> bool {
-        let (a, b) = (self.dim / 2 - 1, self.dim / 2);
-        (cell.x == a || cell.x == b) && (cell.y == a || cell.y == b)
+        in_goal_room(self.dim, cell)
     }
 
     /// Cells reachable from `from` through open sides, in breadth-first order.
@@ -302,6 +301,13 @@ impl Maze {
         }
         problems
     }
+}
+
+/// Whether `cell` is in the goal room (the centre 2 x 2) of a maze of side `dim`: the
+/// room depends on the side alone.
+pub fn in_goal_room(dim: u32, cell: Position) -> bool {
+    let (a, b) = (dim / 2 - 1, dim / 2);
+    (cell.x == a || cell.x == b) && (cell.y == a || cell.y == b)
 }
 
 /// Where a movement of `movement` cells (negative: backwards) from `cell` facing

@@ -31,7 +31,7 @@ fn maze(name: &str, seed: u64) -> Value {
 }
 
 /// Waits (at most 180 s) for `check` to hold of GET `path`'s JSON (as `token`).
-async fn wait_for(
+pub(crate) async fn wait_for(
     server: &TestServer,
     path: &str,
     token: Option<&str>,

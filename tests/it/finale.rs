@@ -7,7 +7,7 @@
 //! the match records, not against the page's own numbers.
 
 use std::collections::BTreeMap;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use fantoccini::Locator;
 use mazearena::engine::generator::generate;
@@ -17,6 +17,7 @@ use serde_json::{Value, json};
 
 use crate::browser::{Browser, artifacts};
 use crate::class_day::browser_login;
+use crate::competitions::wait_for;
 use crate::sessions::Web;
 use crate::support::{ADMIN, TestServer};
 
@@ -45,23 +46,6 @@ const ENTRANTS: [(&str, &str); 12] = [
     ("hal", "30 14"),
     ("ivy", "0 20"),
 ];
-
-async fn wait_for(
-    server: &TestServer,
-    path: &str,
-    token: Option<&str>,
-    check: impl Fn(&Value) -> bool,
-) -> Value {
-    let deadline = Instant::now() + Duration::from_secs(240);
-    loop {
-        let (_, v) = server.get(path, token).await;
-        if check(&v) {
-            return v;
-        }
-        assert!(Instant::now() < deadline, "{path} never got there: {v}");
-        tokio::time::sleep(Duration::from_millis(250)).await;
-    }
-}
 
 /// A match's score in thirtieths from its record (a match that did not finish: none).
 fn score30(m: &Value) -> Option<i64> {
@@ -767,6 +751,14 @@ async fn a_tournaments_race_plays_every_bot_on_one_maze() {
         .map(|r| r["name"].as_str().unwrap())
         .collect();
     assert_eq!(names, ["quick", "slow", "slower"]);
+    // A crowd asking for the same race at once is answered the same (from one making).
+    let same = path(mazes[0], 0);
+    let crowd = (0..50).map(|_| server.get_text(&same));
+    let answers = futures_util::future::join_all(crowd).await;
+    assert!(
+        answers.iter().all(|a| a.0 == 200 && a.1 == answers[0].1),
+        "every answer is the race"
+    );
     let (s, v) = server.get(&path(mazes[1], 0), None).await;
     assert_eq!(s, 403, "a hidden maze's race: {v}");
     let (s, v) = server.get(&path(mazes[1], 0), Some(ADMIN)).await;

@@ -126,17 +126,8 @@ async fn race_page(
 
 /// The path of a competition's race page.
 fn race_path(name: &str, maze: &str, repeat: i64) -> String {
-    let escaped: String = maze
-        .bytes()
-        .map(|b| {
-            if b.is_ascii_alphanumeric() || b"-_.".contains(&b) {
-                (b as char).to_string()
-            } else {
-                format!("%{b:02X}")
-            }
-        })
-        .collect();
-    format!("/competitions/{name}/race/{escaped}/{repeat}")
+    let maze = crate::registry::finale::path_segment(maze);
+    format!("/competitions/{name}/race/{maze}/{repeat}")
 }
 
 async fn tournament_race_page(

@@ -27,7 +27,7 @@ use crate::storage::Storage;
 use crate::storage::competitions::{CompetitionMaze, CompetitionRow};
 use crate::storage::matches::MatchRow;
 
-pub use race::{race, races, tournament_race};
+pub use race::{path_segment, race, races, tournament_race};
 pub use reveal::reveal;
 pub use shows::Shows;
 

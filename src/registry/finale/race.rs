@@ -6,7 +6,8 @@ use super::{
     results_open, score30,
 };
 use crate::engine::game::StepEvent;
-use crate::engine::{Maze, Position, mazefile, solver};
+use crate::engine::maze::in_goal_room;
+use crate::engine::{Position, mazefile, solver};
 use crate::registry::competitions as ops;
 use crate::runner::outcome::{MatchState, MatchStatus};
 use crate::storage::Storage;
@@ -44,7 +45,7 @@ pub async fn races(
                     path: format!(
                         "/competitions/{}/race/{}/{repeat}",
                         c.name,
-                        urlencoding_path(&m.name)
+                        path_segment(&m.name)
                     ),
                 });
             }
@@ -55,7 +56,7 @@ pub async fn races(
 
 /// A maze name as one segment of a path (names are letters, digits, `-`, `_`, `.`;
 /// anything else is escaped).
-fn urlencoding_path(name: &str) -> String {
+pub fn path_segment(name: &str) -> String {
     let mut out = String::new();
     for b in name.bytes() {
         if b.is_ascii_alphanumeric() || b"-_.".contains(&b) {
@@ -284,11 +285,7 @@ pub(super) async fn runner_of(
     let Some(record) = storage.get_record(m.match_id).await? else {
         return Ok(None);
     };
-    let maze = storage
-        .get_maze(m.maze_id)
-        .await?
-        .and_then(|z| mazefile::parse(z.layout.as_bytes()).ok());
-    let (run0, run1, goal0) = paths(&record.trace, maze.as_ref());
+    let (run0, run1, goal0) = paths(&record.trace, m.maze_dim as u32);
     let finished = m.status == MatchState::Ended(MatchStatus::Finished);
     Ok(Some(Runner {
         name: name.to_string(),
@@ -310,7 +307,7 @@ pub(super) async fn runner_of(
 /// of run 0 at which the robot first stood in the goal room.
 fn paths(
     trace: &[crate::runner::outcome::TraceStep],
-    maze: Option<&Maze>,
+    dim: u32,
 ) -> (Vec<[u32; 2]>, Vec<[u32; 2]>, Option<u32>) {
     let start = [0, 0];
     let (mut run0, mut run1) = (vec![start], vec![start]);
@@ -325,7 +322,7 @@ fn paths(
                 cell(r.position)
             };
             run0.push(here);
-            if goal0.is_none() && maze.is_some_and(|m| m.is_goal(r.position)) {
+            if goal0.is_none() && in_goal_room(dim, r.position) {
                 goal0 = Some((run0.len() - 1) as u32);
             }
         } else {
@@ -341,7 +338,7 @@ mod tests {
 
     #[test]
     fn a_path_name_is_one_segment() {
-        assert_eq!(urlencoding_path("test_maze-01.txt"), "test_maze-01.txt");
-        assert_eq!(urlencoding_path("a/b c"), "a%2Fb%20c");
+        assert_eq!(path_segment("test_maze-01.txt"), "test_maze-01.txt");
+        assert_eq!(path_segment("a/b c"), "a%2Fb%20c");
     }
 }

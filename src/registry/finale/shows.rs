@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use super::{Race, Result, Reveal, race, results_open, reveal};
+use super::{Race, Result, Reveal, race, results_open, reveal, tournament_race};
 use crate::storage::Storage;
 use crate::storage::competitions::CompetitionRow;
 
@@ -16,15 +16,23 @@ pub const KEPT_FOR: std::time::Duration = std::time::Duration::from_secs(5);
 /// How many reveals and races are kept.
 const KEPT: usize = 32;
 
-/// What a kept show answers: a competition's results as one caller sees them.
+/// What a kept show answers: a competition's results as one caller sees them, or a
+/// tournament's race (whose access the caller checked).
 #[derive(Debug, Clone, PartialEq, Eq)]
-struct ShowKey {
-    competition_id: i64,
-    state: Option<String>,
-    finalized_at: Option<i64>,
-    organiser: bool,
-    /// `None`: the reveal; else the race on this maze and seed.
-    race: Option<(String, i64)>,
+enum ShowKey {
+    Competition {
+        competition_id: i64,
+        state: Option<String>,
+        finalized_at: Option<i64>,
+        organiser: bool,
+        /// `None`: the reveal; else the race on this maze and seed.
+        race: Option<(String, i64)>,
+    },
+    Tournament {
+        tournament_id: i64,
+        maze_id: i64,
+        repeat: i64,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -58,8 +66,26 @@ impl Shows {
         kept.push((key, std::time::Instant::now(), show));
     }
 
+    /// The show kept under `key`, else `make`'s (one making at a time), kept.
+    async fn kept_or_made(
+        &self,
+        key: ShowKey,
+        make: impl std::future::Future<Output = Result<Show>>,
+    ) -> Result<Show> {
+        if let Some(s) = self.find(&key) {
+            return Ok(s);
+        }
+        let _one = self.making.lock().await;
+        if let Some(s) = self.find(&key) {
+            return Ok(s);
+        }
+        let s = make.await?;
+        self.keep(key, s.clone());
+        Ok(s)
+    }
+
     fn key(c: &CompetitionRow, organiser: bool, race: Option<(String, i64)>) -> ShowKey {
-        ShowKey {
+        ShowKey::Competition {
             competition_id: c.competition_id,
             state: c.state.clone(),
             finalized_at: c.finalized_at,
@@ -79,17 +105,14 @@ impl Shows {
         organiser: bool,
     ) -> Result<Arc<Reveal>> {
         results_open(c, organiser)?;
-        let key = Self::key(c, organiser, None);
-        if let Some(Show::Reveal(r)) = self.find(&key) {
-            return Ok(r);
+        let make = async { Ok(Show::Reveal(Arc::new(reveal(storage, c, organiser).await?))) };
+        match self
+            .kept_or_made(Self::key(c, organiser, None), make)
+            .await?
+        {
+            Show::Reveal(r) => Ok(r),
+            Show::Race(_) => unreachable!("a reveal's key holds a reveal"),
         }
-        let _one = self.making.lock().await;
-        if let Some(Show::Reveal(r)) = self.find(&key) {
-            return Ok(r);
-        }
-        let r = Arc::new(reveal(storage, c, organiser).await?);
-        self.keep(key, Show::Reveal(r.clone()));
-        Ok(r)
     }
 
     /// [`race`], kept.
@@ -106,15 +129,42 @@ impl Shows {
     ) -> Result<Arc<Race>> {
         results_open(c, organiser)?;
         let key = Self::key(c, organiser, Some((maze.to_string(), repeat)));
-        if let Some(Show::Race(r)) = self.find(&key) {
-            return Ok(r);
+        let make = async {
+            Ok(Show::Race(Arc::new(
+                race(storage, c, organiser, maze, repeat).await?,
+            )))
+        };
+        Self::as_race(self.kept_or_made(key, make).await?)
+    }
+
+    /// [`tournament_race`], kept: the caller has checked that it may see it.
+    ///
+    /// # Errors
+    /// As [`tournament_race`].
+    pub async fn tournament_race(
+        &self,
+        storage: &Storage,
+        tournament_id: i64,
+        maze_id: i64,
+        repeat: i64,
+    ) -> Result<Arc<Race>> {
+        let key = ShowKey::Tournament {
+            tournament_id,
+            maze_id,
+            repeat,
+        };
+        let make = async {
+            Ok(Show::Race(Arc::new(
+                tournament_race(storage, tournament_id, maze_id, repeat).await?,
+            )))
+        };
+        Self::as_race(self.kept_or_made(key, make).await?)
+    }
+
+    fn as_race(show: Show) -> Result<Arc<Race>> {
+        match show {
+            Show::Race(r) => Ok(r),
+            Show::Reveal(_) => unreachable!("a race's key holds a race"),
         }
-        let _one = self.making.lock().await;
-        if let Some(Show::Race(r)) = self.find(&key) {
-            return Ok(r);
-        }
-        let r = Arc::new(race(storage, c, organiser, maze, repeat).await?);
-        self.keep(key, Show::Race(r.clone()));
-        Ok(r)
     }
 }
