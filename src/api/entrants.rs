@@ -5,13 +5,14 @@
 use axum::extract::State;
 use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
-use utoipa::ToSchema;
+use utoipa::{IntoParams, ToSchema};
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 use super::AppState;
 use super::auth::{Caller, hash_token, new_token};
 use super::error::{ApiError, ApiResult, AppJson, AppPath, AppQuery, ErrorBody};
+use crate::registry::entrants::EntrantList;
 use crate::storage::entrants::Registration;
 
 /// The most members an entrant lists, and the longest member name.
@@ -301,18 +302,51 @@ pub(crate) async fn register(
     })
 }
 
+/// The query of `GET /api/entrants`.
+#[derive(Debug, Deserialize, IntoParams)]
+#[serde(deny_unknown_fields)]
+pub struct EntrantSearch {
+    /// Part of a name or a member's name, any case (left out: everyone).
+    pub search: Option<String>,
+    /// At most this many (1 to 500; default 100).
+    pub limit: Option<i64>,
+}
+
+/// The entrants whose name or members hold `search`, for `caller` (the admin): the
+/// API's and the admin page's one way.
+///
+/// # Errors
+/// Not the admin; a limit out of range.
+pub(crate) async fn find_entrants(
+    state: &AppState,
+    caller: &Caller,
+    search: &str,
+    limit: i64,
+) -> ApiResult<EntrantList> {
+    caller.require_admin()?;
+    if !(1..=500).contains(&limit) {
+        return Err(ApiError::BadRequest("limit: 1 to 500".into()));
+    }
+    if search.chars().count() > 100 || search.chars().any(char::is_control) {
+        return Err(ApiError::BadRequest(
+            "search: at most 100 characters, no control characters".into(),
+        ));
+    }
+    Ok(crate::registry::entrants::find(&state.storage, search, limit).await?)
+}
+
 /// List and search the entrants (the admin only).
-#[utoipa::path(get, path = "/api/entrants", tag = "entrants", params(super::invites::EntrantSearch),
+#[utoipa::path(get, path = "/api/entrants", tag = "entrants", params(EntrantSearch),
     security(("bearer" = [])),
     responses((status = 200, body = crate::registry::entrants::EntrantList), (status = 400, body = ErrorBody),
         (status = 401, body = ErrorBody), (status = 403, body = ErrorBody)))]
 async fn list_entrants(
     State(state): State<AppState>,
     caller: Caller,
-    AppQuery(q): AppQuery<super::invites::EntrantSearch>,
+    AppQuery(q): AppQuery<EntrantSearch>,
 ) -> ApiResult<axum::Json<crate::registry::entrants::EntrantList>> {
     Ok(axum::Json(
-        super::invites::find_entrants(
+        find_entrants(
             &state,
             &caller,
             q.search.as_deref().unwrap_or(""),

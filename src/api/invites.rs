@@ -1,12 +1,12 @@
 //! What an organiser and the admin do for the people of a class: a competition's own
-//! invite code (set, rotated, removed), the list of entrants (the admin's, searched),
-//! and new keys for those who lost theirs (an entrant's: the admin, or the organiser of
-//! the competitions it takes part in; an organiser's: the admin).
+//! invite code (set, rotated, removed), and new keys for those who lost theirs (an
+//! entrant's: the admin, or the organiser of the competitions it takes part in; an
+//! organiser's: the admin).
 
 use axum::extract::State;
 use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
-use utoipa::{IntoParams, ToSchema};
+use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
@@ -14,7 +14,6 @@ use super::AppState;
 use super::auth::{Caller, hash_token, new_token};
 use super::entrants::NewKey;
 use super::error::{ApiError, ApiResult, AppJson, AppPath, ErrorBody};
-use crate::registry::entrants::EntrantList;
 use crate::registry::invites;
 
 pub(super) fn router() -> OpenApiRouter<AppState> {
@@ -110,39 +109,6 @@ async fn remove_invite(
 ) -> ApiResult<StatusCode> {
     remove(&state, &caller, &name).await?;
     Ok(StatusCode::NO_CONTENT)
-}
-
-/// The query of `GET /api/entrants`.
-#[derive(Debug, Deserialize, IntoParams)]
-#[serde(deny_unknown_fields)]
-pub struct EntrantSearch {
-    /// Part of a name or a member's name, any case (left out: everyone).
-    pub search: Option<String>,
-    /// At most this many (1 to 500; default 100).
-    pub limit: Option<i64>,
-}
-
-/// The entrants whose name or members hold `search`, for `caller` (the admin): the
-/// API's and the admin page's one way.
-///
-/// # Errors
-/// Not the admin; a limit out of range.
-pub(crate) async fn find_entrants(
-    state: &AppState,
-    caller: &Caller,
-    search: &str,
-    limit: i64,
-) -> ApiResult<EntrantList> {
-    caller.require_admin()?;
-    if !(1..=500).contains(&limit) {
-        return Err(ApiError::BadRequest("limit: 1 to 500".into()));
-    }
-    if search.chars().count() > 100 || search.chars().any(char::is_control) {
-        return Err(ApiError::BadRequest(
-            "search: at most 100 characters, no control characters".into(),
-        ));
-    }
-    Ok(crate::registry::entrants::find(&state.storage, search, limit).await?)
 }
 
 /// Replaces organiser `id`'s key for `caller` (the admin): the API's and the admin

@@ -1,9 +1,11 @@
-//! The HTTP/JSON API (axum): thin handlers that extract, call storage, and answer JSON.
+//! The HTTP face (axum): thin handlers that extract, call the registry's operations or
+//! storage, and answer JSON.
 //!
 //! Routes (see `GET /api/openapi.json`, generated from these handlers):
 //! bots, entrants, competitions, mazes, matches, tournaments, leaderboard, plus
-//! `/healthz` and `/metrics`; and the web pages ([`pages`]: `/`, `/competitions`,
-//! `/bots`, `/mazes`, `/matches`, `/tournaments`).
+//! `/healthz` and `/metrics`; and the site ([`site`]: the handlers of the pages and
+//! forms, `/`, `/competitions`, `/bots`, `/mazes`, `/matches`, `/tournaments`, whose
+//! views are [`crate::web`]).
 //! Every error has the shape `{"error":{"code":..,"message":..}}` ([`error`]).
 
 pub mod auth;
@@ -20,9 +22,9 @@ pub mod limits;
 pub mod lists;
 pub mod matches;
 pub mod mazes;
-pub mod pages;
 pub mod practice;
 pub mod session;
+pub mod site;
 pub mod system;
 pub mod tournaments;
 
@@ -210,7 +212,7 @@ fn document_input_errors(doc: &mut utoipa::openapi::OpenApi) {
 pub fn app(state: AppState) -> Router {
     let (router, _) = routes();
     router
-        .merge(pages::router())
+        .merge(site::router())
         .fallback(error::not_found)
         .method_not_allowed_fallback(error::method_not_allowed)
         .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))

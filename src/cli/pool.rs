@@ -9,7 +9,7 @@ use clap::Args;
 use crate::registry::cache::{BundleCache, DEFAULT_CACHE_BYTES};
 use crate::runner::Limits;
 use crate::storage::Storage;
-use crate::worker::{self, WorkerConfig};
+use crate::work::worker::{self, WorkerConfig};
 
 /// The match workers' settings, shared by `serve` and `worker`.
 #[derive(Debug, Args)]
@@ -58,7 +58,7 @@ impl PoolArgs {
     /// The workers to run on this machine: `--jobs` (default: the number of cores), at
     /// least `least`, at most one per core (said on stderr when lowered).
     pub(super) fn jobs(&self, least: usize) -> usize {
-        let cores = worker::cores();
+        let cores = crate::runner::affinity::cores();
         if self.jobs.is_some_and(|j| j > cores) {
             eprintln!(
                 "--jobs {} lowered to {cores}: one bot process per core keeps timing fair",

@@ -14,7 +14,7 @@ use crate::api::{self, AppState, Settings, auth};
 use crate::metrics::Metrics;
 use crate::registry::{self, RegistryError};
 use crate::storage::{Backend, Storage, with_patience};
-use crate::worker::{self, Shutdown};
+use crate::work::worker::{self, Shutdown};
 
 use super::pool::PoolArgs;
 

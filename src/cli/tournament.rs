@@ -20,7 +20,7 @@ use crate::registry::{
 };
 use crate::runner::{self, Limits};
 use crate::storage::leaderboard::Scope;
-use crate::worker::{self, Shutdown, WorkerConfig};
+use crate::work::worker::{self, Shutdown, WorkerConfig};
 
 use super::report::{markdown, print_failures, print_table, results};
 
@@ -193,7 +193,7 @@ async fn play(
     let t = storage
         .create_tournament(&args.name, &version_ids, &maze_ids, args.repeats)
         .await?;
-    let cores = worker::cores();
+    let cores = crate::runner::affinity::cores();
     let jobs = args.jobs.unwrap_or(cores).clamp(1, cores);
     if !args.json {
         eprintln!(

@@ -13,7 +13,7 @@ use tokio_util::task::TaskTracker;
 
 use super::pool::PoolArgs;
 use super::serve::{finish, hidden_paths, wait_for_signal};
-use crate::worker::{self, Shutdown};
+use crate::work::worker::{self, Shutdown};
 
 /// Settings of `mazearena worker`; every flag can also come from its `MAZEARENA_*` variable.
 #[derive(Debug, Args)]

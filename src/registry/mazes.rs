@@ -79,7 +79,10 @@ pub async fn find_or_admit_all(
 /// The optimum of each maze (`None`: its goal cannot be reached), the mazes shared
 /// out over the cores.
 fn optima(mazes: &[(String, Maze)]) -> Vec<Option<i64>> {
-    let per_thread = mazes.len().div_ceil(crate::worker::cores()).max(1);
+    let per_thread = mazes
+        .len()
+        .div_ceil(crate::runner::affinity::cores())
+        .max(1);
     std::thread::scope(|scope| {
         let parts: Vec<_> = mazes
             .chunks(per_thread)

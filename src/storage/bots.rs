@@ -4,6 +4,7 @@
 
 use sqlx::FromRow;
 
+pub use super::build_status;
 use super::matches::failure_record;
 use super::owners::{self, OwnerLimits, OwnerQuotaKind, OwnerUsage};
 use super::{Result, Storage, StorageError, is_unique_violation, now_ms};
@@ -107,24 +108,6 @@ pub fn env_json(pairs: &[(String, String)]) -> String {
         .map(|(k, v)| (k.as_str(), v.as_str()))
         .collect();
     serde_json::to_string(&map).unwrap_or_else(|_| "{}".into())
-}
-
-/// A version's build status.
-pub mod build_status {
-    /// Plays.
-    pub const READY: &str = "ready";
-    /// Waits for, or is in, its build.
-    pub const BUILDING: &str = "building";
-    /// Its build failed: it never plays.
-    pub const FAILED: &str = "build_failed";
-    /// Its validation match (after the build) failed: it crashed, timed out or broke
-    /// the protocol there, so it never plays and does not count against a quota.
-    pub const INVALID: &str = "invalid";
-
-    /// Whether a version of this status never plays.
-    pub fn never_plays(status: &str) -> bool {
-        status == FAILED || status == INVALID
-    }
 }
 
 /// A new version's details.

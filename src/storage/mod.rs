@@ -12,6 +12,7 @@
 
 pub mod bots;
 pub mod budgets;
+pub mod build_status;
 pub mod builds;
 pub mod bundles;
 pub mod competitions;

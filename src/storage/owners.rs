@@ -4,7 +4,7 @@
 //! (the fair queue's lanes are the same owners). The rules (sizes, messages) are
 //! [`crate::registry::owners`].
 
-use super::bots::build_status;
+use super::build_status;
 use super::{Backend, Result, Storage};
 
 /// Whose quota: an entrant, or the owner token of bots of no entrant (by its hash).

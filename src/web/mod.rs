@@ -2,7 +2,7 @@
 //!
 //! Pure rendering: every function here takes data and returns markup (maud escapes
 //! every value, so names, stderr lines and debug text from bots stay text). Nothing in
-//! here reads the database, the clock or files; `api::pages` fetches and calls in, and
+//! here reads the database, the clock or files; `api::site` fetches and calls in, and
 //! the CLI writes the standalone viewer to a file. The viewer's script and styles are
 //! embedded in the binary: no page loads anything from the network.
 

@@ -16,6 +16,7 @@ mod deploy;
 mod faults;
 mod finale;
 mod hostile;
+mod house;
 mod load;
 mod mazefiles;
 mod mms;

@@ -63,7 +63,7 @@ pub enum UploadRefusal {
 
 /// Whether bot `bot_id` may get a new version at `now` (see [`UploadRefusal`]); if so,
 /// the version quotas it must still hold, one for each competition it is entered in.
-/// They go to [`super::bots::add_version`], which counts them again in the transaction
+/// They go to [`crate::registry::bots::add_version`], which counts them again in the transaction
 /// that adds the version: uploads sent at once all pass this check before any is added.
 ///
 /// # Errors

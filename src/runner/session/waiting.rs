@@ -206,6 +206,6 @@ impl Session {
 /// it: a step then costs the referee its four system calls (the sense's `write`, the
 /// wait, the answer's `read`, the CPU counter) and little else, where a wait through
 /// the runtime's reactor costs some 4,000 instructions more (docs/PERFORMANCE.md).
-/// Each match has a thread of its own ([`crate::worker`], `mazearena run`), so the
+/// Each match has a thread of its own ([`crate::work::worker`], `mazearena run`), so the
 /// wait holds up nothing else for long.
 const NEAR_WAIT: Duration = Duration::from_millis(2);

@@ -1,6 +1,6 @@
 //! The server's pages: leaderboard, bots, mazes, matches, tournaments. Each function
 //! takes what the page shows (already filtered for what an anonymous visitor may see:
-//! `api::pages` applies the hidden-maze rules) and returns the whole page.
+//! `api::site` applies the hidden-maze rules) and returns the whole page.
 //!
 //! Lists are plain HTML tables with links (sorting and paging are links too), so they
 //! work without JavaScript; scripts only add live progress and the owner's logs.

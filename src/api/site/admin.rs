@@ -43,7 +43,7 @@ async fn admin_data_found(
     visitor.caller.require_admin()?;
     let mode = state.storage.registration().await?;
     let found =
-        super::super::invites::find_entrants(state, &visitor.caller, search, ADMIN_ENTRANTS)
+        super::super::entrants::find_entrants(state, &visitor.caller, search, ADMIN_ENTRANTS)
             .await?;
     Ok(web::AdminPage {
         mode: super::super::entrants::registration_name(&mode).into(),

@@ -32,12 +32,6 @@ pub const DEFAULT_LEASE: Duration = Duration::from_secs(30);
 /// How often an idle worker looks at the queue even without being woken.
 pub const IDLE_POLL: Duration = Duration::from_millis(500);
 
-/// The number of cores: the default and the maximum number of workers, so that each
-/// bot has a core to itself and timing is fair.
-pub fn cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
-}
-
 /// How the workers run.
 #[derive(Debug, Clone)]
 pub struct WorkerConfig {
@@ -64,7 +58,7 @@ pub struct WorkerConfig {
     pub builds: Option<PathBuf>,
     /// The bound of each build's writable area, in bytes.
     pub build_write_bytes: u64,
-    /// Play each new version's validation match after its build ([`crate::builder`]).
+    /// Play each new version's validation match after its build ([`crate::work::builder`]).
     pub validate: bool,
 }
 
@@ -152,7 +146,7 @@ pub fn spawn_workers(
         sandbox: config.sandbox.level(),
     };
     if let Some(scratch) = &config.builds {
-        let builder = crate::builder::Builder {
+        let builder = crate::work::builder::Builder {
             storage: reporter.storage.clone(),
             sandbox: config.sandbox.clone(),
             scratch: scratch.clone(),

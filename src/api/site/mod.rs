@@ -1,4 +1,4 @@
-//! The server's web pages (HTML): thin handlers that fetch what a page shows, apply the
+//! The site's handlers: the server's web pages (HTML) and forms, thin handlers that fetch what a page shows, apply the
 //! hidden-maze rules (a hidden maze's layout, replay and failure text never appear in a
 //! page), and call `web::pages`. Pages never take a token: a visitor is anonymous, or
 //! signed in with a browser session ([`super::session`]), which acts as the key that
