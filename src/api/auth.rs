@@ -84,6 +84,22 @@ impl Caller {
         }
     }
 
+    /// Tournament `id`, if the caller may see it ([`Caller::sees_tournament`]).
+    ///
+    /// # Errors
+    /// No such tournament, or not open to the caller (the same 404: a sealed
+    /// tournament's existence is not told); database failures.
+    pub async fn tournament(
+        &self,
+        state: &AppState,
+        id: i64,
+    ) -> Result<crate::storage::tournaments::TournamentRow, ApiError> {
+        match state.storage.get_tournament(id).await? {
+            Some(t) if self.sees_tournament(state, &t).await? => Ok(t),
+            _ => Err(ApiError::NotFound(format!("no tournament {id}"))),
+        }
+    }
+
     /// Whether the caller may see tournament `t`: any caller an unsealed one; a sealed one
     /// (a competition's, before its results) the admin and that competition's organiser.
     ///

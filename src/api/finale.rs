@@ -182,14 +182,7 @@ pub(crate) async fn tournament_race(
     maze_id: i64,
     repeat: i64,
 ) -> ApiResult<Arc<Race>> {
-    let t = state
-        .storage
-        .get_tournament(id)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-    if !caller.sees_tournament(state, &t).await? {
-        return Err(ApiError::NotFound(format!("no tournament {id}")));
-    }
+    let t = caller.tournament(state, id).await?;
     // A competition's tournament races by the competition's rules (its results first,
     // the versions that counted, its hidden mazes its organisers' only).
     if let Some(c) = t.competition_id {

@@ -41,14 +41,7 @@ async fn get_leaderboard(
 ) -> ApiResult<axum::Json<Vec<Standing>>> {
     let scope = match (q.tournament, q.scope.as_deref()) {
         (Some(id), None) => {
-            let t = state
-                .storage
-                .get_tournament(id)
-                .await?
-                .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-            if !caller.sees_tournament(&state, &t).await? {
-                return Err(ApiError::NotFound(format!("no tournament {id}")));
-            }
+            let t = caller.tournament(&state, id).await?;
             let organises = caller
                 .organises_competition_of(&state, t.competition_id)
                 .await?;

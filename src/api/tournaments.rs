@@ -151,14 +151,7 @@ async fn get_tournament(
     caller: Caller,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<axum::Json<TournamentView>> {
-    let t = state
-        .storage
-        .get_tournament(id)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
-    if !caller.sees_tournament(&state, &t).await? {
-        return Err(ApiError::NotFound(format!("no tournament {id}")));
-    }
+    let t = caller.tournament(&state, id).await?;
     let organises = caller
         .organises_competition_of(&state, t.competition_id)
         .await?;

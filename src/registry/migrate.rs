@@ -121,10 +121,7 @@ mod tests {
                     files_sha256: &summary.sha256,
                     file_count: 1,
                     build_command: build,
-                    env: &[],
-                    bundle_sha256: None,
-                    runtime: None,
-                    protocol: None,
+                    ..test_support::plain_version()
                 },
             )
             .await
@@ -167,10 +164,7 @@ mod tests {
                         files_sha256: "x",
                         file_count: 0,
                         build_command: None,
-                        env: &[],
-                        bundle_sha256: None,
-                        runtime: None,
-                        protocol: None,
+                        ..test_support::plain_version()
                     },
                 )
                 .await

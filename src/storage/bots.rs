@@ -573,7 +573,7 @@ async fn insert_version(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::storage::test_support::backends;
+    use crate::storage::test_support::{backends, plain_version};
 
     fn version<'a>(command: &'a str) -> NewVersion<'a> {
         NewVersion {
@@ -582,10 +582,7 @@ mod tests {
             files_sha256: "abc",
             file_count: 1,
             build_command: None,
-            env: &[],
-            bundle_sha256: None,
-            runtime: None,
-            protocol: None,
+            ..plain_version()
         }
     }
 

@@ -217,7 +217,20 @@ pub(super) async fn hold_in(
 mod tests {
     use super::*;
     use crate::storage::bots::VersionRefusal;
+    use crate::storage::bots::{BotVersionRow, NewVersion};
     use crate::storage::test_support::{backends, plain_version, with_build};
+
+    /// Adds `version` to bot `bot` within `limits`: the version, or why it was refused.
+    async fn add(
+        db: &Storage,
+        bot: i64,
+        version: &NewVersion<'_>,
+        limits: &OwnerLimits,
+    ) -> std::result::Result<BotVersionRow, VersionRefusal> {
+        db.add_bot_version_within(bot, version, &[], Some(limits))
+            .await
+            .unwrap()
+    }
 
     #[tokio::test]
     async fn an_owners_quotas_are_counted_where_the_version_is_stored() {
@@ -236,15 +249,12 @@ mod tests {
                 .await
                 .unwrap()
                 .unwrap();
-            db.add_bot_version_within(first.bot_id, &with_build(), &[], Some(&limits))
+            add(&db, first.bot_id, &with_build(), &limits)
                 .await
-                .unwrap()
                 .unwrap();
             // Two waiting for their build: a third is refused, and stores nothing.
-            let refused = db
-                .add_bot_version_within(first.bot_id, &with_build(), &[], Some(&limits))
+            let refused = add(&db, first.bot_id, &with_build(), &limits)
                 .await
-                .unwrap()
                 .unwrap_err();
             let VersionRefusal::Owner(OwnerQuotaKind::Pending, usage) = refused else {
                 panic!("{refused:?}")
@@ -268,15 +278,12 @@ mod tests {
             assert!(usage.pending.is_empty());
             // Versions without a build are not pending: up to the daily quota of 4.
             for _ in 0..3 {
-                db.add_bot_version_within(first.bot_id, &plain_version(), &[], Some(&limits))
+                add(&db, first.bot_id, &plain_version(), &limits)
                     .await
-                    .unwrap()
                     .unwrap();
             }
-            let refused = db
-                .add_bot_version_within(first.bot_id, &plain_version(), &[], Some(&limits))
+            let refused = add(&db, first.bot_id, &plain_version(), &limits)
                 .await
-                .unwrap()
                 .unwrap_err();
             assert!(
                 matches!(
@@ -291,10 +298,8 @@ mod tests {
                 most_build_ms: Some(40_000),
                 ..limits.clone()
             };
-            let refused = db
-                .add_bot_version_within(first.bot_id, &plain_version(), &[], Some(&roomy))
+            let refused = add(&db, first.bot_id, &plain_version(), &roomy)
                 .await
-                .unwrap()
                 .unwrap_err();
             assert!(
                 matches!(refused, VersionRefusal::Owner(OwnerQuotaKind::BuildTime, _)),

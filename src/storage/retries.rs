@@ -142,7 +142,7 @@ mod tests {
     use super::*;
     use crate::storage::bots::NewVersion;
     use crate::storage::leaderboard::Scope;
-    use crate::storage::test_support::{backends, bot_and_maze};
+    use crate::storage::test_support::{backends, bot_and_maze, plain_version};
 
     /// Claims the next match with a lease that has already expired, as a server that
     /// died while playing it would leave it, then reaps.
@@ -262,10 +262,7 @@ mod tests {
                         files_sha256: "o",
                         file_count: 1,
                         build_command: None,
-                        env: &[],
-                        bundle_sha256: None,
-                        runtime: None,
-                        protocol: None,
+                        ..plain_version()
                     },
                 )
                 .await
@@ -286,10 +283,7 @@ mod tests {
                 files_sha256: "t",
                 file_count: 1,
                 build_command: None,
-                env: &[],
-                bundle_sha256: None,
-                runtime: None,
-                protocol: None,
+                ..plain_version()
             };
             db.add_bot_version(bot_id, &v2).await.unwrap();
             let bot = db.get_bot(bot_id).await.unwrap().unwrap();

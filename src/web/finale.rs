@@ -3,14 +3,17 @@
 //! HTML files that play without it. One script and one style sheet
 //! (`assets/finale.*`) serve both; the data is one JSON element.
 
-use maud::{DOCTYPE, Markup, PreEscaped, html};
+use maud::{Markup, PreEscaped, html};
 use serde::Serialize;
 
 use super::viewer::script_json;
 use crate::registry::finale::{Race, RaceLink, Reveal};
 
 /// The script of the reveal and the race (no network access, no libraries).
-pub const FINALE_JS: &str = include_str!("assets/finale.js");
+pub const FINALE_JS: &str = concat!(
+    include_str!("assets/maze.js"),
+    include_str!("assets/finale.js")
+);
 /// Their styles, scoped under `#finale`.
 pub const FINALE_CSS: &str = include_str!("assets/finale.css");
 
@@ -52,18 +55,7 @@ fn body(data: &FinaleData<'_>, online: Option<&Online>) -> Markup {
 }
 
 fn document(title: &str, data: &FinaleData<'_>) -> String {
-    html! {
-        (DOCTYPE)
-        html lang="en" {
-            head {
-                meta charset="utf-8";
-                meta name="viewport" content="width=device-width, initial-scale=1";
-                title { (title) " · mazearena" }
-            }
-            body { (body(data, None)) }
-        }
-    }
-    .into_string()
+    super::layout::offline_document(&format!("{title} · mazearena"), None, body(data, None))
 }
 
 /// The reveal as a page of the server.

@@ -10,15 +10,50 @@ pub const SITE_CSS: &str = include_str!("assets/site.css");
 /// be escaped (unescaped, the pattern is invalid and the field is not checked at all).
 pub const NAME_PATTERN: &str = r"[A-Za-z0-9._\-]+";
 
+/// The start of every document's head: its characters, the viewport, `title`.
+fn head_start(title: &str) -> Markup {
+    html! {
+        meta charset="utf-8";
+        meta name="viewport" content="width=device-width, initial-scale=1";
+        title { (title) }
+    }
+}
+
+/// A whole self-contained document that opens from disk and loads nothing (the offline
+/// replay and the final night's files): `title`, `body` with its inline style if any.
+pub fn offline_document(title: &str, body_style: Option<&str>, body: Markup) -> String {
+    html! {
+        (DOCTYPE)
+        html lang="en" {
+            head { (head_start(title)) }
+            body style=[body_style] { (body) }
+        }
+    }
+    .into_string()
+}
+
+/// A whole page, as [`page`], that reloads itself every 5 seconds while `live` (a
+/// match or a build that is still going).
+pub fn live_page(title: &str, body: Markup, live: bool) -> String {
+    let html = page(title, body);
+    if live {
+        html.replacen(
+            "<meta charset=\"utf-8\">",
+            "<meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"5\">",
+            1,
+        )
+    } else {
+        html
+    }
+}
+
 /// A whole page: `title` in the head and as the heading's text is given by `body`.
 pub fn page(title: &str, body: Markup) -> String {
     html! {
         (DOCTYPE)
         html lang="en" {
             head {
-                meta charset="utf-8";
-                meta name="viewport" content="width=device-width, initial-scale=1";
-                title { (title) " · mazearena" }
+                (head_start(&format!("{title} · mazearena")))
                 link rel="icon" type="image/svg+xml" href="/favicon.svg";
                 style { (PreEscaped(SITE_CSS)) }
             }

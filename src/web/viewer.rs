@@ -5,7 +5,7 @@
 //! The viewer reads one JSON document, [`ViewerData`], from a
 //! `<script type="application/json" id="replay-data">` element.
 
-use maud::{DOCTYPE, Markup, PreEscaped, html};
+use maud::{Markup, PreEscaped, html};
 use serde::Serialize;
 
 use crate::engine::{Maze, Position, mazefile, solver};
@@ -14,7 +14,10 @@ use crate::runner::MatchRecord;
 /// The viewer's markup (an HTML fragment whose root is `#viewer`).
 pub const VIEWER_HTML: &str = include_str!("assets/viewer.html");
 /// The viewer's script (no network access, no libraries).
-pub const VIEWER_JS: &str = include_str!("assets/viewer.js");
+pub const VIEWER_JS: &str = concat!(
+    include_str!("assets/maze.js"),
+    include_str!("assets/viewer.js")
+);
 /// The viewer's styles, scoped under `#viewer`.
 pub const VIEWER_CSS: &str = include_str!("assets/viewer.css");
 
@@ -110,20 +113,11 @@ pub fn embed(data: &ViewerData<'_>) -> Markup {
 
 /// A whole self-contained HTML file showing one match: opens from disk, loads nothing.
 pub fn standalone(data: &ViewerData<'_>) -> String {
-    html! {
-        (DOCTYPE)
-        html lang="en" {
-            head {
-                meta charset="utf-8";
-                meta name="viewport" content="width=device-width, initial-scale=1";
-                title { (data.title) " · mazearena replay" }
-            }
-            body style="margin:0;font-family:system-ui,sans-serif;background:#f6f7f9" {
-                (embed(data))
-            }
-        }
-    }
-    .into_string()
+    super::layout::offline_document(
+        &format!("{} · mazearena replay", data.title),
+        Some("margin:0;font-family:system-ui,sans-serif;background:#f6f7f9"),
+        embed(data),
+    )
 }
 
 #[cfg(test)]

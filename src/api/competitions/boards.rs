@@ -69,22 +69,7 @@ pub(crate) async fn default_board(
         frozen_at: None,
         final_run: None,
         final_run_playing: false,
-        standings: rows
-            .into_iter()
-            .map(|r| BoardLine {
-                rank: r.rank,
-                entrant: String::new(),
-                bot_id: r.bot_id,
-                bot_name: r.name,
-                version: r.version,
-                played: r.played,
-                finished: r.finished,
-                mean_score: r.mean_score,
-                score_sum30: r.score_sum30,
-                finish_rate: r.finish_rate,
-                uncertainty: r.uncertainty,
-            })
-            .collect(),
+        standings: rows.into_iter().map(BoardLine::from_standing).collect(),
     })
 }
 

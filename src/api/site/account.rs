@@ -37,6 +37,31 @@ pub(super) async fn login_page(visitor: Visitor, Query(q): Query<NextQuery>) -> 
     Html(account::login(None, &next)).into_response()
 }
 
+/// A form that deals in keys: the sender's address (for the budget of wrong guesses),
+/// whether the session cookie must be `Secure`, and the form.
+async fn key_form<T: serde::de::DeserializeOwned>(
+    state: &AppState,
+    request: Request,
+) -> PageResult<(Option<std::net::IpAddr>, bool, T)> {
+    let client = client_of(&request);
+    let secure = session::secure(state, request.headers());
+    Ok((client, secure, read_form(state, request).await?))
+}
+
+/// A new session for the key `key_hash`: a session the browser had before (planted or
+/// not) ends here. Returns its cookie.
+async fn new_session(
+    state: &AppState,
+    visitor: &Visitor,
+    key_hash: &str,
+    secure: bool,
+) -> PageResult<cookie::Cookie<'static>> {
+    if let Some(old) = &visitor.session {
+        state.storage.end_session(&old.hash).await?;
+    }
+    Ok(session::open(state, key_hash, secure).await?)
+}
+
 /// The login form.
 #[derive(Debug, Deserialize)]
 struct LoginForm {
@@ -49,9 +74,7 @@ pub(super) async fn login(
     visitor: Visitor,
     request: Request,
 ) -> PageResult {
-    let client = client_of(&request);
-    let secure = session::secure(&state, request.headers());
-    let form: LoginForm = read_form(&state, request).await?;
+    let (client, secure, form): (_, _, LoginForm) = key_form(&state, request).await?;
     let next = local_next(form.next.as_deref());
     let again = |message: &str| account::login(Some(message), &next);
     // A right key always logs in; a key nobody holds spends its address's budget of
@@ -72,10 +95,7 @@ pub(super) async fn login(
     }
     // A new session every time: a session the browser had before (planted or not)
     // ends here.
-    if let Some(old) = &visitor.session {
-        state.storage.end_session(&old.hash).await?;
-    }
-    let cookie = session::open(&state, &key_hash, secure).await?;
+    let cookie = new_session(&state, &visitor, &key_hash, secure).await?;
     Ok(see_other(&next, Some(cookie)))
 }
 
@@ -170,9 +190,7 @@ pub(super) async fn register(
     visitor: Visitor,
     request: Request,
 ) -> PageResult {
-    let client = client_of(&request);
-    let secure = session::secure(&state, request.headers());
-    let form: RegisterForm = read_form(&state, request).await?;
+    let (client, secure, form): (_, _, RegisterForm) = key_form(&state, request).await?;
     let p = register_page_data(&state, form.invite_code.as_deref(), None).await?;
     let body = super::super::entrants::EntrantRequest {
         name: form.name.trim().to_string(),
@@ -191,10 +209,7 @@ pub(super) async fn register(
             PageError::from(e)
                 .with_page(|m| account::register(&p, Some(m), &form.name, &form.members))
         })?;
-    if let Some(old) = &visitor.session {
-        state.storage.end_session(&old.hash).await?;
-    }
-    let cookie = session::open(&state, &hash_token(&created.key), secure).await?;
+    let cookie = new_session(&state, &visitor, &hash_token(&created.key), secure).await?;
     Ok(key_page(
         account::registered(&created.name, &created.key, created.competition.as_deref()),
         cookie,
@@ -412,9 +427,7 @@ pub(super) async fn rotate_key(
     visitor: Visitor,
     request: Request,
 ) -> PageResult {
-    let client = client_of(&request);
-    let secure = session::secure(&state, request.headers());
-    let form: RotateForm = read_form(&state, request).await?;
+    let (client, secure, form): (_, _, RotateForm) = key_form(&state, request).await?;
     visitor.check_csrf(form.csrf.as_deref())?;
     let e = super::super::competitions::entrant(&state, &visitor.caller).await?;
     // A copied session cookie must not become a key of its own: replacing the key

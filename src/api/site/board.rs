@@ -65,12 +65,9 @@ pub(super) async fn leaderboard_page(
             ));
         }
         (Some(id), None) => {
-            let t = state
-                .storage
-                .get_tournament(id)
-                .await?
-                .filter(|t| !t.sealed)
-                .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+            let t = super::super::auth::Caller::Anonymous
+                .tournament(state, id)
+                .await?;
             // A competition's tournament: its standings are the competition's boards.
             if let Some(c) = t.competition_id {
                 return match state.storage.get_competition_by_id(c).await? {

@@ -369,12 +369,9 @@ async fn tournament_page(
     State(state): State<AppState>,
     AppPath(id): AppPath<i64>,
 ) -> ApiResult<Html<String>> {
-    let t = state
-        .storage
-        .get_tournament(id)
-        .await?
-        .filter(|t| !t.sealed)
-        .ok_or_else(|| ApiError::NotFound(format!("no tournament {id}")))?;
+    let t = super::auth::Caller::Anonymous
+        .tournament(&state, id)
+        .await?;
     let (standings, sealed) = tournament_for_caller(
         state
             .ranker

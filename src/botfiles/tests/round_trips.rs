@@ -91,63 +91,48 @@ fn hash_is_independent_of_format_order_and_timestamps() {
         ("README", "bot"),
         ("src/a", ""),
     ];
-    let json = {
+    let written = |files: &[(&str, &str)]| {
         let d = dest();
-        write_files(&map(&files), &d.dest, &small()).unwrap().sha256
+        write_files(&map(files), &d.dest, &small()).unwrap().sha256
     };
-    let tar_gz = {
-        let bytes = tgz(&[
-            T::Dir("src/"),
-            T::File("./src/main.py", 0o644, b"print('hi')\n"),
-            T::File("README", 0o600, b"bot"),
-            T::File("src/a", 0o644, b""),
-        ]);
-        unpack(&bytes, &small()).1.unwrap().sha256
-    };
-    let zip_reordered = {
-        let bytes = zip(&[
-            Z::File("src/a", 0o644, b""),
-            Z::File("README", 0o644, b"bot"),
-            Z::File("src/main.py", 0o644, b"print('hi')\n"),
-        ]);
-        unpack(&bytes, &small()).1.unwrap().sha256
-    };
+    let unpacked = |bytes: &[u8]| unpack(bytes, &small()).1.unwrap().sha256;
+    let json = written(&files);
+    let tar_gz = unpacked(&tgz(&[
+        T::Dir("src/"),
+        T::File("./src/main.py", 0o644, b"print('hi')\n"),
+        T::File("README", 0o600, b"bot"),
+        T::File("src/a", 0o644, b""),
+    ]));
+    let zip_reordered = unpacked(&zip(&[
+        Z::File("src/a", 0o644, b""),
+        Z::File("README", 0o644, b"bot"),
+        Z::File("src/main.py", 0o644, b"print('hi')\n"),
+    ]));
     assert_eq!(json, tar_gz);
     assert_eq!(json, zip_reordered);
 
     // One byte changed.
-    let changed = {
-        let files = [
-            ("src/main.py", "print('hI')\n"),
-            ("README", "bot"),
-            ("src/a", ""),
-        ];
-        let d = dest();
-        write_files(&map(&files), &d.dest, &small()).unwrap().sha256
-    };
+    let changed = written(&[
+        ("src/main.py", "print('hI')\n"),
+        ("README", "bot"),
+        ("src/a", ""),
+    ]);
     assert_ne!(json, changed);
 
     // The executable bit counts.
-    let exec = {
-        let bytes = tgz(&[
-            T::File("src/main.py", 0o755, b"print('hi')\n"),
-            T::File("README", 0o644, b"bot"),
-            T::File("src/a", 0o644, b""),
-        ]);
-        unpack(&bytes, &small()).1.unwrap().sha256
-    };
+    let exec = unpacked(&tgz(&[
+        T::File("src/main.py", 0o755, b"print('hi')\n"),
+        T::File("README", 0o644, b"bot"),
+        T::File("src/a", 0o644, b""),
+    ]));
     assert_ne!(json, exec);
 
     // A renamed file counts.
-    let renamed = {
-        let files = [
-            ("src/main.py", "print('hi')\n"),
-            ("README", "bot"),
-            ("src/b", ""),
-        ];
-        let d = dest();
-        write_files(&map(&files), &d.dest, &small()).unwrap().sha256
-    };
+    let renamed = written(&[
+        ("src/main.py", "print('hi')\n"),
+        ("README", "bot"),
+        ("src/b", ""),
+    ]);
     assert_ne!(json, renamed);
 }
 

@@ -70,6 +70,24 @@ impl BoardLine {
         }
     }
 
+    /// A bot's line of the server's ranking (the default competition's board: no
+    /// entrants).
+    pub fn from_standing(r: crate::storage::leaderboard::Standing) -> BoardLine {
+        BoardLine {
+            rank: r.rank,
+            entrant: String::new(),
+            bot_id: r.bot_id,
+            bot_name: r.name,
+            version: r.version,
+            played: r.played,
+            finished: r.finished,
+            mean_score: r.mean_score,
+            score_sum30: r.score_sum30,
+            finish_rate: r.finish_rate,
+            uncertainty: r.uncertainty,
+        }
+    }
+
     /// An entrant's line of the final results.
     pub fn from_result(r: &ResultRow) -> BoardLine {
         BoardLine {

@@ -152,12 +152,7 @@ async fn finalize(storage: &Storage, c: &CompetitionRow) -> Result<bool> {
             })
         })
         .collect();
-    let private: Vec<CompetitionMaze> = storage
-        .competition_mazes(c.competition_id)
-        .await?
-        .into_iter()
-        .filter(|m| m.maze_set == "private")
-        .collect();
+    let private = private_mazes(storage, c).await?;
     let mazes: Vec<serde_json::Value> = private
         .iter()
         .map(|m| serde_json::json!({"name": m.name, "hash": m.hash}))
@@ -308,12 +303,7 @@ pub async fn publish(storage: &Storage, c: &CompetitionRow) -> Result<()> {
             )));
         }
     }
-    let private: Vec<CompetitionMaze> = storage
-        .competition_mazes(c.competition_id)
-        .await?
-        .into_iter()
-        .filter(|m| m.maze_set == "private")
-        .collect();
+    let private = private_mazes(storage, c).await?;
     let reveal = mazes_to_reveal(storage, c, &private).await?;
     if !storage.publish_results(c, &reveal).await? {
         return Err(RegistryError::Conflict(format!(
@@ -431,4 +421,11 @@ pub fn results_csv(rows: &[ResultRow]) -> String {
         ));
     }
     out
+}
+
+/// The mazes of `c`'s private set.
+async fn private_mazes(storage: &Storage, c: &CompetitionRow) -> Result<Vec<CompetitionMaze>> {
+    let mut mazes = storage.competition_mazes(c.competition_id).await?;
+    mazes.retain(|m| m.maze_set == "private");
+    Ok(mazes)
 }

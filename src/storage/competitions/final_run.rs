@@ -46,14 +46,7 @@ impl Storage {
         let _turn = self.write_turn().await;
         let now = now_ms();
         let mut tx = self.begin_write().await?;
-        let moved = sqlx::query(
-            "update competition set state = 'final_run' where competition_id = $1 and state is null",
-        )
-        .bind(c.competition_id)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected();
-        if moved == 0 {
+        if !move_state(&mut tx, c.competition_id, None, "final_run").await? {
             return Ok(false);
         }
         for id in selected {
@@ -113,19 +106,14 @@ impl Storage {
         let _turn = self.write_turn().await;
         let mut tx = self.begin_write().await?;
         let state = if c.hold_results { "held" } else { "final" };
-        let moved = sqlx::query(
-            "update competition set state = $3, finalized_at = $2
-             where competition_id = $1 and state = 'final_run'",
-        )
-        .bind(c.competition_id)
-        .bind(now_ms())
-        .bind(state)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected();
-        if moved == 0 {
+        if !move_state(&mut tx, c.competition_id, Some("final_run"), state).await? {
             return Ok(false);
         }
+        sqlx::query("update competition set finalized_at = $2 where competition_id = $1")
+            .bind(c.competition_id)
+            .bind(now_ms())
+            .execute(&mut *tx)
+            .await?;
         for r in rows {
             sqlx::query(
                 "insert into competition_result (competition_id, rank, entrant_id, entrant_name, bot_id,
@@ -166,14 +154,7 @@ impl Storage {
     pub async fn publish_results(&self, c: &CompetitionRow, reveal: &[i64]) -> Result<bool> {
         let _turn = self.write_turn().await;
         let mut tx = self.begin_write().await?;
-        let moved = sqlx::query(
-            "update competition set state = 'final' where competition_id = $1 and state = 'held'",
-        )
-        .bind(c.competition_id)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected();
-        if moved == 0 {
+        if !move_state(&mut tx, c.competition_id, Some("held"), "final").await? {
             return Ok(false);
         }
         open_results(&mut tx, c.competition_id, reveal).await?;
@@ -297,6 +278,27 @@ async fn insert_matches(
         query.execute(&mut **tx).await?;
     }
     Ok(())
+}
+
+/// Moves competition `competition_id` from state `from` (`None`: open) to `to`, in
+/// `tx`; false when it was not in `from` (another server moved it first).
+async fn move_state(
+    tx: &mut sqlx::Transaction<'_, sqlx::Any>,
+    competition_id: i64,
+    from: Option<&str>,
+    to: &str,
+) -> Result<bool> {
+    let moved = sqlx::query(
+        "update competition set state = $2
+         where competition_id = $1 and coalesce(state, '') = coalesce($3, '')",
+    )
+    .bind(competition_id)
+    .bind(to)
+    .bind(from)
+    .execute(&mut **tx)
+    .await?
+    .rows_affected();
+    Ok(moved == 1)
 }
 
 /// What publishing results opens: the competition's tournaments unsealed, `reveal`'s

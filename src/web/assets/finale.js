@@ -22,19 +22,7 @@
     return e;
   }
 
-  function parseLayout(layout) {
-    if (typeof layout !== 'string') return null;
-    var lines = layout.split(/\r?\n/).map(function (l) { return l.trim(); }).filter(function (l) { return l !== ''; });
-    var n = parseInt(lines[0], 10);
-    if (!(n >= 2 && n <= 64) || lines.length < n + 1) return null;
-    var open = new Uint8Array(n * n);
-    for (var x = 0; x < n; x++) {
-      var vals = lines[x + 1].split(',');
-      if (vals.length < n) return null;
-      for (var y = 0; y < n; y++) open[x * n + y] = Number(vals[y]) & 15;
-    }
-    return { n: n, open: open };
-  }
+  var parseLayout = mazearenaLayout.parse;
 
   function colour(i) { return 'hsl(' + Math.round((i * 137.508) % 360) + ', 72%, 42%)'; }
   function fmtScore(s) { return s == null ? '' : Number(s).toFixed(3); }

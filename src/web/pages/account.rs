@@ -375,16 +375,7 @@ pub fn me(p: &MePage) -> String {
             (match_table(&p.matches))
         }
     };
-    let html = page("My page", body);
-    if p.live {
-        html.replacen(
-            "<meta charset=\"utf-8\">",
-            "<meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"5\">",
-            1,
-        )
-    } else {
-        html
-    }
+    super::super::layout::live_page("My page", body, p.live)
 }
 
 /// What the submission form offers.

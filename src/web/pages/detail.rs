@@ -209,16 +209,11 @@ pub fn match_page(p: &MatchPage<'_>) -> String {
             }
         }
     };
-    let html = page(&title, body);
-    if matches!(r.status.to_string().as_str(), "queued" | "running") {
-        html.replacen(
-            "<meta charset=\"utf-8\">",
-            "<meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"5\">",
-            1,
-        )
-    } else {
-        html
-    }
+    super::super::layout::live_page(
+        &title,
+        body,
+        matches!(r.status.to_string().as_str(), "queued" | "running"),
+    )
 }
 
 /// A tournament's page.
