@@ -6,7 +6,10 @@
 //! tournament on two hidden mazes and a public one, a third bot's single match);
 //! `leaderboards-0.2.0.json` are its own leaderboards. An older data
 //! folder (uploaded bots' files on disk) moves into the database; a bundle damaged in
-//! the database is refused by the worker.
+//! the database is refused by the worker. `schema-N.*` are databases of three earlier
+//! schemas filled by their own commits' servers (`make-old-schemas.sh` says how), on
+//! SQLite and PostgreSQL: migrated by `mazearena migrate`, every board and result reads
+//! the same.
 
 use std::path::Path;
 
@@ -381,5 +384,292 @@ fn every_committed_migration_is_unchanged() {
             hash, seen[&file],
             "{file} was edited after it was committed: add a new migration instead"
         );
+    }
+}
+
+/// The schemas of earlier commits with a database filled by that commit's own server
+/// (`tests/fixtures/db/make-old-schemas.sh` made them): competitions added (0012), exact
+/// sums (0016), the mms protocol and rejudges (0018). Each holds a competition open
+/// (entrants, bots, versions, practice and ranking matches), one closed with its final
+/// run and results (at 0018 rejudged twice), one still to come, and a tournament and
+/// bots outside competitions; `schema-N.{sqlite,pg}.json` are what its API showed each
+/// caller.
+const EARLIER_SCHEMAS: [&str; 3] = ["0012", "0016", "0018"];
+
+fn fixture(name: &str) -> std::path::PathBuf {
+    root().join("tests/fixtures/db").join(name)
+}
+
+/// `mazearena migrate` brings `database` up to this release's schema.
+fn migrate(database: &str) {
+    let run = mazearena(&["migrate", "--database", database]);
+    let out = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{run:?}");
+    let newest = std::fs::read_dir(root().join("migrations/sqlite"))
+        .unwrap()
+        .count();
+    assert!(
+        out.contains(&format!("({newest} applied)")),
+        "every migration applied: {out}"
+    );
+}
+
+/// The differences between what a view shows now and what it showed (`old`), as paths;
+/// `close` allows a float to differ by its rounding to 3 decimals.
+fn differences(new: &Value, old: &Value, at: &str, close: bool, out: &mut Vec<String>) {
+    match (new, old) {
+        (Value::Object(n), Value::Object(o)) => {
+            for (k, v) in o {
+                differences(
+                    n.get(k).unwrap_or(&Value::Null),
+                    v,
+                    &format!("{at}.{k}"),
+                    close,
+                    out,
+                );
+            }
+        }
+        (Value::Array(n), Value::Array(o)) if n.len() == o.len() => {
+            for (i, (a, b)) in n.iter().zip(o).enumerate() {
+                differences(a, b, &format!("{at}[{i}]"), close, out);
+            }
+        }
+        (Value::Number(a), Value::Number(b))
+            if close && (a.as_f64().unwrap() - b.as_f64().unwrap()).abs() <= 0.000_501 => {}
+        _ if new == old => {}
+        _ => out.push(format!("{at}: now {new}, was {old}")),
+    }
+}
+
+/// Every view the old server showed, asked again of this release's server on the
+/// migrated database: the same status, and every field of the old body with the same
+/// value (new fields may be added). An error's code counts, not its wording.
+/// `who` chooses the callers compared; `skip` the paths compared another way.
+async fn views_read_the_same(
+    server: &crate::support::TestServer,
+    made: &Value,
+    who: &dyn Fn(&str) -> bool,
+    skip: &dyn Fn(&str) -> bool,
+    close: bool,
+) -> usize {
+    let token = |caller: &str| match caller {
+        "admin" => Some(crate::support::ADMIN.to_string()),
+        "anonymous" => None,
+        other => Some(made["tokens"][other].as_str().unwrap().to_string()),
+    };
+    let mut compared = 0;
+    let mut wrong = Vec::new();
+    for view in made["views"].as_array().unwrap() {
+        let (caller, path) = (view["as"].as_str().unwrap(), view["path"].as_str().unwrap());
+        // What this machine's runtimes are is not the database's.
+        if path == "/api/runtimes" || !who(caller) || skip(path) {
+            continue;
+        }
+        let (status, text, _) = server.get_raw(path, token(caller).as_deref()).await;
+        let old_status = view["status"].as_i64().unwrap() as u16;
+        if status != old_status {
+            wrong.push(format!(
+                "{caller} {path}: status {status}, was {old_status}: {text}"
+            ));
+            continue;
+        }
+        let now = serde_json::from_str(&text).unwrap_or(Value::String(text));
+        let mut out = Vec::new();
+        if old_status >= 400 {
+            differences(
+                &now["error"]["code"],
+                &view["body"]["error"]["code"],
+                "",
+                close,
+                &mut out,
+            );
+        } else {
+            differences(&now, &view["body"], "", close, &mut out);
+        }
+        wrong.extend(out.into_iter().map(|d| format!("{caller} {path}{d}")));
+        compared += 1;
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} differences:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+    compared
+}
+
+/// What an old server showed, from `schema-N.{backend}.json`.
+fn made_by(schema: &str, backend: &str) -> Value {
+    serde_json::from_str(
+        &std::fs::read_to_string(fixture(&format!("schema-{schema}.{backend}.json"))).unwrap(),
+    )
+    .unwrap()
+}
+
+/// Today's server on the migrated `database` reads as the old one did.
+async fn an_earlier_schema_reads_the_same(dir: &Path, database: &str, schema: &str, made: &Value) {
+    migrate(database);
+    let server = crate::support::TestServer::start_on(dir, Some(database), &["--jobs", "0"], &[]);
+    let everyone = |_: &str| true;
+    let nothing = |_: &str| false;
+    if schema != "0012" {
+        let compared = views_read_the_same(&server, made, &everyone, &nothing, false).await;
+        assert!(compared > 100, "{schema}: {compared} views");
+    } else {
+        // Since 0012, on purpose: the last phase is named `final`; means are shown
+        // rounded to 3 decimals (from exact sums); a competition belongs to the
+        // organiser who made it (0012 recorded no maker: its competitions are the
+        // admin's, who hands them on); the private set is played only by the final run,
+        // and the rules of what other callers see are stricter. So the admin's views
+        // are compared, and the private boards below.
+        let admin = |who: &str| who == "admin";
+        let private = |path: &str| path.contains("board=private");
+        let renamed = rename_phase(made);
+        let compared = views_read_the_same(&server, &renamed, &admin, &private, true).await;
+        assert!(compared > 15, "{schema}: {compared} views");
+        old_private_boards_read_from_their_tournaments(&server, made).await;
+        // Handed to their organiser, the competitions read for it as for the admin.
+        let teacher = made["tokens"]["organiser"].as_str().unwrap();
+        for name in ["open-cup", "closed-cup", "future-cup"] {
+            let (s, handed, _) = server
+                .call(
+                    reqwest::Method::PATCH,
+                    &format!("/api/competitions/{name}"),
+                    Some(serde_json::json!({"organiser": "teacher"})),
+                    Some(crate::support::ADMIN),
+                )
+                .await;
+            assert_eq!(s, 200, "{name}: {handed}");
+            let path = format!("/api/competitions/{name}");
+            let (_, as_admin) = server.get(&path, Some(crate::support::ADMIN)).await;
+            let (_, as_teacher) = server.get(&path, Some(teacher)).await;
+            assert_eq!(as_teacher, as_admin, "{name}");
+        }
+    }
+    // The closed competition's private board is its final run, the run its results
+    // were written from.
+    let (_, board) = server
+        .get(
+            "/api/competitions/closed-cup/leaderboard?board=private",
+            Some(crate::support::ADMIN),
+        )
+        .await;
+    let (_, results) = server
+        .get(
+            "/api/competitions/closed-cup/results",
+            Some(crate::support::ADMIN),
+        )
+        .await;
+    let results = results["results"].as_array().unwrap();
+    assert!(!results.is_empty(), "{schema}: results");
+    for r in results {
+        let line = board["standings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| l["bot_id"] == r["bot_id"])
+            .unwrap_or_else(|| panic!("{schema}: {r} on the private board {board}"));
+        for field in ["version", "played", "finished", "score_sum30"] {
+            assert_eq!(line[field], r[field], "{schema} {field}: {line} / {r}");
+        }
+    }
+}
+
+/// 0012's last phase, `closed`, is named `final` now.
+fn rename_phase(made: &Value) -> Value {
+    fn walk(v: &mut Value) {
+        match v {
+            Value::Object(o) => {
+                for (k, v) in o.iter_mut() {
+                    if k == "phase" && v == "closed" {
+                        *v = Value::String("final".into());
+                    } else {
+                        walk(v);
+                    }
+                }
+            }
+            Value::Array(a) => a.iter_mut().for_each(walk),
+            _ => {}
+        }
+    }
+    let mut made = made.clone();
+    walk(&mut made);
+    made
+}
+
+/// 0012's private boards were tournaments of their own ("NAME: private ranking", played
+/// while the competition was open); their matches and lines are all still there.
+async fn old_private_boards_read_from_their_tournaments(
+    server: &crate::support::TestServer,
+    made: &Value,
+) {
+    let admin = Some(crate::support::ADMIN);
+    let (_, list) = server.get("/api/tournaments?limit=100", admin).await;
+    for view in made["views"].as_array().unwrap() {
+        let path = view["path"].as_str().unwrap();
+        if view["as"] != "admin" || !path.ends_with("/leaderboard?board=private") {
+            continue;
+        }
+        let name = path.split('/').nth(3).unwrap();
+        let tournament = list["items"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["name"] == format!("{name}: private ranking"))
+            .unwrap_or_else(|| panic!("{name}'s private ranking in {list}"));
+        let (_, lines) = server
+            .get(
+                &format!(
+                    "/api/leaderboard?tournament={}",
+                    tournament["tournament_id"]
+                ),
+                admin,
+            )
+            .await;
+        for old in view["body"]["standings"].as_array().unwrap() {
+            let now = lines
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|l| l["bot_id"] == old["bot_id"] && l["version"] == old["version"])
+                .unwrap_or_else(|| panic!("{name}: {old} in {lines}"));
+            let mut out = Vec::new();
+            for field in ["played", "finished", "mean_score"] {
+                differences(&now[field], &old[field], field, true, &mut out);
+            }
+            assert!(out.is_empty(), "{name}: {out:?}");
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn databases_of_earlier_schemas_read_the_same_after_migrate_on_sqlite() {
+    for schema in EARLIER_SCHEMAS {
+        let dir = tempfile::tempdir().unwrap();
+        let to = dir.path().join("old.db");
+        std::fs::copy(fixture(&format!("schema-{schema}.db")), &to).unwrap();
+        let database = format!("sqlite://{}", to.display());
+        an_earlier_schema_reads_the_same(dir.path(), &database, schema, &made_by(schema, "sqlite"))
+            .await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn databases_of_earlier_schemas_read_the_same_after_migrate_on_postgresql() {
+    let Some((cluster, _)) = crate::faults::postgres("the PostgreSQL upgrade test") else {
+        return;
+    };
+    for schema in EARLIER_SCHEMAS {
+        let dir = tempfile::tempdir().unwrap();
+        let database = crate::faults::new_database(&cluster, &format!("upgrade_{schema}")).await;
+        // The old server's database, as `pg_dump` wrote it.
+        let load = std::process::Command::new("psql")
+            .args(["-X", "-q", "-v", "ON_ERROR_STOP=1", "-d", &database, "-f"])
+            .arg(fixture(&format!("schema-{schema}.pg.sql")))
+            .output()
+            .expect("psql runs");
+        assert!(load.status.success(), "{schema}: {load:?}");
+        an_earlier_schema_reads_the_same(dir.path(), &database, schema, &made_by(schema, "pg"))
+            .await;
     }
 }
