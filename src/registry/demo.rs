@@ -105,7 +105,7 @@ pub struct Demo {
 
 /// Seeds a fresh demo database (none if it has bots already: a demo started before):
 /// the kits' bots (the JavaScript ones only `with_node`), an entrant each, entered in
-/// [`COMPETITION`] (open now for [`OPEN_DAYS`] days: the first shipped maze to
+/// [`COMPETITION`] (open now for `OPEN_DAYS` (30) days: the first shipped maze to
 /// practise on, generated hidden mazes to rank on), and a tournament of them all on the
 /// shipped (public) mazes `shipped`. `scratch` is a local folder for the uploads.
 ///

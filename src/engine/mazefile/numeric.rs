@@ -163,7 +163,8 @@ pub fn write(maze: &Maze) -> String {
 }
 
 impl Maze {
-    /// The SHA-256 of the maze's canonical numeric text ([`write`]), as lowercase hex:
+    /// The SHA-256 of the maze's canonical numeric text
+    /// ([`numeric::write`](crate::engine::mazefile::numeric::write)), as lowercase hex:
     /// the same layout gives the same hash whichever file format it came from.
     pub fn hash(&self) -> String {
         use sha2::{Digest, Sha256};

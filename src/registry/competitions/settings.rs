@@ -203,7 +203,7 @@ pub struct Patch {
     /// Whether the private mazes are shown with the results.
     pub reveal_private_mazes: Option<bool>,
     /// Whether the results wait for an organiser to publish them (until they are
-    /// written: afterwards they are published, [`publish`]).
+    /// written: afterwards they are published, [`super::publish`]).
     pub hold_results: Option<bool>,
     /// The match limits (all three, replacing the old).
     pub limits: Option<Limits>,

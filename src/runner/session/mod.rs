@@ -245,7 +245,7 @@ impl Session {
     /// at the whole-match limits meanwhile.
     ///
     /// The sense is written and the answer waited for on the match's thread first
-    /// ([`NEAR_WAIT`]), then through the runtime; either way every stderr byte the bot
+    /// (`waiting::NEAR_WAIT`), then through the runtime; either way every stderr byte the bot
     /// wrote before its answer is read before the answer.
     pub async fn exchange(&mut self, sense: &Sense) -> Verdict {
         let mut ask = self.ask(sense).await;

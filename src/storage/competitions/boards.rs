@@ -122,7 +122,7 @@ impl Storage {
     /// How much of a closed competition is still to happen before its selection: matches
     /// of its tournaments queued or running, and for each entered bot, its newest version
     /// uploaded before the close if that is still waiting for its build (the builders
-    /// take those first: [`super::builds::FAIR_BUILD_ORDER`]). An older version still
+    /// take those first: [`crate::storage::builds::FAIR_BUILD_ORDER`]). An older version still
     /// building is superseded and does not hold the close: an entrant who uploads several
     /// versions at the deadline holds it for one build at most.
     ///

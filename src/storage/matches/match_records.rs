@@ -130,7 +130,7 @@ impl Storage {
 
     /// Writes a played match's record, in one transaction, if `owner` still holds it:
     /// its summary in the match row, the whole record compactly in `match_record` (see
-    /// [`super::records`]). Returns false (and writes nothing) when the lease was lost
+    /// [`crate::storage::records`]). Returns false (and writes nothing) when the lease was lost
     /// meanwhile.
     ///
     /// `maze` is the maze it was played on.
