@@ -6,7 +6,7 @@
 Plays a small tournament into a fresh SQLite database with the binary (so the schema is
 the binary's own, migrations and all), adds 20 bots of 20 owners, then fills the queue
 two ways and times the claim's choice of the next match (`FAIR_ORDER` in
-src/storage/matches.rs, read from the source, as the claim runs it: `limit 1`) with
+src/storage/matches/queue.rs, read from the source, as the claim runs it: `limit 1`) with
 Python's sqlite3, RUNS times after 3 warm-ups (medians):
 
   - 200 single matches (10 per owner) and a tournament of 9,800;
@@ -32,10 +32,10 @@ OWNERS = 20
 
 
 def fair_order():
-    source = open(os.path.join("src", "storage", "matches.rs")).read()
+    source = open(os.path.join("src", "storage", "matches", "queue.rs")).read()
     found = re.search(r'const FAIR_ORDER: &str = "(.*?)";', source, re.S)
     if not found:
-        sys.exit("claim.py: FAIR_ORDER not found in src/storage/matches.rs")
+        sys.exit("claim.py: FAIR_ORDER not found in src/storage/matches/queue.rs")
     # $4 is the claim's tournament (none for a server's claim).
     return found.group(1).replace("$4", "NULL") + " limit 1"
 
@@ -129,7 +129,7 @@ def main():
     print("## The fair claim at 10,000 queued matches")
     print()
     print(f"`python3 benches/claim.py {args.runs}`: the claim's choice of the next match "
-          "(`FAIR_ORDER` in src/storage/matches.rs: the first waiting match of each owner's "
+          "(`FAIR_ORDER` in src/storage/matches/queue.rs: the first waiting match of each owner's "
           "lane and each tournament, then the least recently served class and lane), timed "
           "by Python's sqlite3 on a server's database (SQLite) holding 10,000 queued matches, "
           f"{args.runs} runs after 3 warm-ups, medians; beside it the plain order of the "

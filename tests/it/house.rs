@@ -326,3 +326,52 @@ fn no_import_runs_up_a_floor() {
         up.join("\n")
     );
 }
+
+/// Every source file the docs, the benchmarks and the scripts name (`src/….rs`) exists:
+/// a room that moves takes its readers with it.
+#[test]
+fn every_source_file_the_docs_and_scripts_name_exists() {
+    let mut files = vec![root().join("README.md"), root().join("fuzz/README.md")];
+    for dir in ["docs", "benches", ".ci", "deploy"] {
+        let mut stack = vec![root().join(dir)];
+        while let Some(d) = stack.pop() {
+            for entry in std::fs::read_dir(&d).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    stack.push(path);
+                } else {
+                    files.push(path);
+                }
+            }
+        }
+    }
+    let mut named = 0;
+    let mut missing = Vec::new();
+    for file in files {
+        let Ok(text) = std::fs::read_to_string(&file) else {
+            continue; // not text
+        };
+        for (i, _) in text.match_indices("src/") {
+            if i > 0 && text[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == '/') {
+                continue; // part of a longer path (e.g. bots/rust/src/)
+            }
+            let path: String = text[i..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || matches!(c, '_' | '/' | '.' | '-'))
+                .collect();
+            let path = path.trim_end_matches('.');
+            if path.ends_with(".rs") {
+                named += 1;
+                if !root().join(path).exists() {
+                    missing.push(format!("{}: {path}", file.display()));
+                }
+            }
+        }
+    }
+    assert!(named > 10, "{named} source files named");
+    assert!(
+        missing.is_empty(),
+        "named but missing:\n{}",
+        missing.join("\n")
+    );
+}
