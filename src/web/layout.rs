@@ -10,10 +10,12 @@ pub const SITE_CSS: &str = include_str!("assets/site.css");
 /// be escaped (unescaped, the pattern is invalid and the field is not checked at all).
 pub const NAME_PATTERN: &str = r"[A-Za-z0-9._\-]+";
 
-/// The start of every document's head: its characters, the viewport, `title`.
-fn head_start(title: &str) -> Markup {
+/// The start of every document's head: its characters, a reload every 5 seconds when
+/// `live`, the viewport, `title`.
+fn head_start(title: &str, live: bool) -> Markup {
     html! {
         meta charset="utf-8";
+        @if live { meta http-equiv="refresh" content="5"; }
         meta name="viewport" content="width=device-width, initial-scale=1";
         title { (title) }
     }
@@ -25,7 +27,7 @@ pub fn offline_document(title: &str, body_style: Option<&str>, body: Markup) -> 
     html! {
         (DOCTYPE)
         html lang="en" {
-            head { (head_start(title)) }
+            head { (head_start(title, false)) }
             body style=[body_style] { (body) }
         }
     }
@@ -35,25 +37,21 @@ pub fn offline_document(title: &str, body_style: Option<&str>, body: Markup) -> 
 /// A whole page, as [`page`], that reloads itself every 5 seconds while `live` (a
 /// match or a build that is still going).
 pub fn live_page(title: &str, body: Markup, live: bool) -> String {
-    let html = page(title, body);
-    if live {
-        html.replacen(
-            "<meta charset=\"utf-8\">",
-            "<meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"5\">",
-            1,
-        )
-    } else {
-        html
-    }
+    document(title, body, live)
 }
 
 /// A whole page: `title` in the head and as the heading's text is given by `body`.
 pub fn page(title: &str, body: Markup) -> String {
+    document(title, body, false)
+}
+
+/// A server page, reloading itself while `live`.
+fn document(title: &str, body: Markup, live: bool) -> String {
     html! {
         (DOCTYPE)
         html lang="en" {
             head {
-                (head_start(&format!("{title} · mazearena")))
+                (head_start(&format!("{title} · mazearena"), live))
                 link rel="icon" type="image/svg+xml" href="/favicon.svg";
                 style { (PreEscaped(SITE_CSS)) }
             }
@@ -117,5 +115,15 @@ mod tests {
         let html = page("<script>x</script>", html! { p { ("<b>bold</b>") } });
         assert!(!html.contains("<script>x"));
         assert!(html.contains("&lt;b&gt;bold&lt;/b&gt;"));
+    }
+
+    #[test]
+    fn a_live_page_reloads_itself_and_a_finished_one_does_not() {
+        let refresh = "<meta http-equiv=\"refresh\" content=\"5\">";
+        let live = live_page("t", html! { p { "x" } }, true);
+        let head = &live[..live.find("</head>").unwrap()];
+        assert_eq!(head.matches(refresh).count(), 1, "{live}");
+        assert!(!live_page("t", html! {}, false).contains("http-equiv"));
+        assert!(!page("t", html! {}).contains("http-equiv"));
     }
 }
