@@ -4,7 +4,7 @@
 # whole file is this script's: the analysis of the figures, with earlier runs' figures
 # (dated), lives in docs/PERFORMANCE.md.
 #
-#   bash benches/run.sh            (about 30 minutes on 2 cores)
+#   bash benches/run.sh            (about an hour on 2 cores)
 #   bash benches/run.sh --quick    (a few minutes: fewer runs, smaller databases and
 #                                   samples; to check the scripts, not for the figures)
 #
