@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every benchmark and writes BENCHMARKS.md (date, machine, commit, then one section
-# a benchmark, each figure beside its floor or baseline measured in the same run). The
-# whole file is this script's: the analysis of the figures, with earlier runs' figures
+# a benchmark, each figure beside its floor or baseline measured in the same run), and
+# from it the capacity plan of docs/DEPLOY.md (benches/capacity.py). BENCHMARKS.md is
+# wholly this script's: the analysis of the figures, with earlier runs' figures
 # (dated), lives in docs/PERFORMANCE.md.
 #
 #   bash benches/run.sh            (about an hour on 2 cores)
@@ -259,3 +260,9 @@ mv "$out" BENCHMARKS.md
 chmod 644 BENCHMARKS.md
 trap - EXIT
 log "wrote BENCHMARKS.md"
+
+# The capacity plan in docs/DEPLOY.md and the scaler's ceiling are read from these figures
+# (a test checks that they agree): written again from a whole run, not from --quick's.
+if [ "$QUICK" != --quick ]; then
+  python3 benches/capacity.py >&2
+fi
