@@ -28,6 +28,8 @@
 # RLIMIT_NOFILE/NPROC, so containers.conf.d/mazearena-ci.conf sets those engine defaults
 # and no default ulimits.
 set -euo pipefail
+# Pipes are read to their end (`grep PATTERN >/dev/null`, not `grep -q`): under pipefail a
+# reader that stops early ends the writer with SIGPIPE, and the check fails though it matched.
 cd "$(dirname "$0")/.."
 BIN=${1:-target/debug/mazearena}
 CONTAINERS=(mazearena mazearena-api mazearena-worker-1 mazearena-worker-2 mazearena-k8s-worker mazearena-k8s-api)
@@ -138,7 +140,7 @@ grep -q '"sandbox":"full"' <<<"$health" || fail "/healthz: $health"
 # No cgroup can be made in this container: /healthz and the first line say the watchdog
 # keeps the limits.
 grep -q '"limits":"watchdog"' <<<"$health" || fail "/healthz does not say what keeps the limits: $health"
-podman logs mazearena 2>&1 | grep -q "match limits by watchdog" || fail "the server's first line does not say what keeps the limits"
+podman logs mazearena 2>&1 | grep "match limits by watchdog" >/dev/null || fail "the server's first line does not say what keeps the limits"
 say "serve: /healthz with the full sandbox, limits by the watchdog (also in its log)"
 
 mapfile -t security < <(python3 .ci/readme_podman.py commands 0 | grep -- '--name mazearena ' |
@@ -190,7 +192,7 @@ say "runtimes: $runtimes"
 t0=$(date +%s%N)
 podman stop mazearena >/dev/null
 stopped_ms=$((($(date +%s%N) - t0) / 1000000))
-podman logs mazearena 2>&1 | grep -q "mazearena stopped" || fail "podman stop: no clean stop in the log"
+podman logs mazearena 2>&1 | grep "mazearena stopped" >/dev/null || fail "podman stop: no clean stop in the log"
 [ "$stopped_ms" -lt 30000 ] || fail "podman stop: took ${stopped_ms} ms"
 say "podman stop: stopped cleanly in ${stopped_ms} ms"
 podman rm mazearena >/dev/null
@@ -266,7 +268,7 @@ for n in $done_by; do [ "$n" -gt 0 ] || fail "a worker played no match: $done_by
 say "a tournament of 12 matches played to the end, each as on the host; matches by worker: $done_by"
 podman stop mazearena-worker-1 mazearena-worker-2 >/dev/null
 for w in 1 2; do
-  podman logs "mazearena-worker-$w" 2>&1 | grep -q "mazearena worker stopped" || fail "worker $w: no clean stop"
+  podman logs "mazearena-worker-$w" 2>&1 | grep "mazearena worker stopped" >/dev/null || fail "worker $w: no clean stop"
 done
 say "the scale profile passed in $(($(date +%s) - started)) s"
 
@@ -288,12 +290,12 @@ eval "podman run -d --name mazearena-k8s-worker --network host --no-healthcheck 
 curl -s "$api/api/tournaments" -H "authorization: Bearer $MAZEARENA_ADMIN_TOKEN" -H 'content-type: application/json' \
   -d "{\"name\": \"image-k8s\", \"bot_ids\": [1, 2], \"maze_ids\": [$ids], \"repeats\": 1}" >/dev/null
 check_tournament 2 6
-podman logs mazearena-k8s-worker 2>&1 | grep -q "sandbox full" || fail "the Kubernetes worker did not say 'sandbox full'"
+podman logs mazearena-k8s-worker 2>&1 | grep "sandbox full" >/dev/null || fail "the Kubernetes worker did not say 'sandbox full'"
 grace=$(python3 -c 'import sys, yaml; d = next(x for x in yaml.safe_load_all(open(sys.argv[1])) if x["kind"] == "Deployment"); print(d["spec"]["template"]["spec"]["terminationGracePeriodSeconds"])' deploy/kubernetes/worker.yaml)
 t0=$(date +%s%N)
 podman stop -t "$grace" mazearena-k8s-worker >/dev/null
 stopped_ms=$((($(date +%s%N) - t0) / 1000000))
-podman logs mazearena-k8s-worker 2>&1 | grep -q "mazearena worker stopped" || fail "the Kubernetes worker: no clean stop"
+podman logs mazearena-k8s-worker 2>&1 | grep "mazearena worker stopped" >/dev/null || fail "the Kubernetes worker: no clean stop"
 [ "$stopped_ms" -lt $((grace * 1000)) ] || fail "the Kubernetes worker took ${stopped_ms} ms to stop (grace ${grace} s)"
 say "the Kubernetes worker's pod played 6 matches alone, each as on the host (sandbox full), and stopped in ${stopped_ms} ms ($(($(date +%s) - started)) s)"
 podman stop mazearena-api >/dev/null
@@ -310,5 +312,5 @@ api=http://127.0.0.1:8082
 answer_of curl -sf "$api/healthz" >/dev/null
 upload py-k8s "python3 simple_bot.py" bots/python simple_bot.py mazebot.py >/dev/null || fail "an upload to the Kubernetes API server's pod"
 podman stop mazearena-k8s-api >/dev/null
-podman logs mazearena-k8s-api 2>&1 | grep -q "API only" || fail "the Kubernetes API server's pod: $(podman logs mazearena-k8s-api 2>&1 | tail -3)"
+podman logs mazearena-k8s-api 2>&1 | grep "API only" >/dev/null || fail "the Kubernetes API server's pod: $(podman logs mazearena-k8s-api 2>&1 | tail -3)"
 say "the Kubernetes API server's pod answers and takes an upload"

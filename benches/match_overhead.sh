@@ -18,7 +18,7 @@ measure() { # $1: full or none
     out=$(./target/release/mazearena run --maze "$maze" --bot ./trivial_bot --bot-dir "$tmp" \
           --sandbox "$1" --json 2>/dev/null)
     end=$(date +%s%N)
-    echo "$out" | grep -q '"status":"step_limit"' || { echo "unexpected result: $out" >&2; exit 1; }
+    echo "$out" | grep '"status":"step_limit"' >/dev/null || { echo "unexpected result: $out" >&2; exit 1; }
     ms=$(( (end - start) / 1000000 ))
     total=$(( total + ms ))
     if [ -z "$best" ] || [ "$ms" -lt "$best" ]; then best=$ms; fi
