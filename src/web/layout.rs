@@ -35,18 +35,8 @@ pub fn offline_document(title: &str, body_style: Option<&str>, body: Markup) -> 
 }
 
 /// A whole page, as [`page`], that reloads itself every 5 seconds while `live` (a
-/// match or a build that is still going).
+/// match or a build that is still going): the site's header, `body` in `main`.
 pub fn live_page(title: &str, body: Markup, live: bool) -> String {
-    document(title, body, live)
-}
-
-/// A whole page: `title` in the head and as the heading's text is given by `body`.
-pub fn page(title: &str, body: Markup) -> String {
-    document(title, body, false)
-}
-
-/// A server page, reloading itself while `live`.
-fn document(title: &str, body: Markup, live: bool) -> String {
     html! {
         (DOCTYPE)
         html lang="en" {
@@ -74,6 +64,11 @@ fn document(title: &str, body: Markup, live: bool) -> String {
         }
     }
     .into_string()
+}
+
+/// A whole page: `title` in the head and as the heading's text is given by `body`.
+pub fn page(title: &str, body: Markup) -> String {
+    live_page(title, body, false)
 }
 
 /// A status as a coloured badge.
